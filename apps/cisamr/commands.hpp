@@ -1,0 +1,22 @@
+#pragma once
+// Each subcommand lives in its own cmd_<name>.cpp and registers itself on the CLI11 app.
+// The callback stores the process exit code in `exit_code`; errors are thrown
+// (InputError → exit 2, anything else → exit 1) and printed once by main().
+#include <CLI/CLI.hpp>
+
+namespace cisamr::app {
+
+struct GlobalFlags {
+  bool quiet = false;    // no progress output
+  bool verbose = false;  // phase timings
+};
+
+void add_mesh_command(CLI::App& app, GlobalFlags& flags, int& exit_code);
+void add_certify_command(CLI::App& app, GlobalFlags& flags, int& exit_code);
+void add_pack_command(CLI::App& app, GlobalFlags& flags, int& exit_code);
+void add_partition_command(CLI::App& app, GlobalFlags& flags, int& exit_code);
+
+// Progress lines go to stderr only when it is a terminal and --quiet is not given.
+bool show_progress(const GlobalFlags& flags);
+
+}  // namespace cisamr::app

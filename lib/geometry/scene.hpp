@@ -1,0 +1,102 @@
+#pragma once
+// The scene description (DESIGN.md §5) as plain data: what io reads and pack writes.
+// No geometry is evaluated here; see oracle2.hpp for the queries.
+#include <array>
+#include <string>
+#include <variant>
+#include <vector>
+
+#include "core/types.hpp"
+
+namespace cisamr::geometry {
+
+using Rotation3 = std::array<std::array<double, 3>, 3>;  // row-major, applied as R·x
+
+// ---- 2D shapes ----
+struct Circle {
+  Vec2 center{};
+  double radius = 0;
+};
+struct Ellipse {
+  Vec2 center{};
+  Vec2 semi_axes{};  // along the rotated x and y axes
+  double angle = 0;  // radians, counter-clockwise
+};
+struct Polygon {
+  std::vector<Vec2> vertices;  // closed implicitly, either orientation, simple
+};
+struct NurbsCurve {  // closed rational curve of any degree
+  int degree = 0;
+  std::vector<double> knots;        // size = control_points.size() + degree + 1
+  std::vector<Vec2> control_points;
+  std::vector<double> weights;      // empty = all 1
+};
+
+// ---- 3D shapes ----
+struct Sphere {
+  Vec3 center{};
+  double radius = 0;
+};
+struct Ellipsoid {
+  Vec3 center{};
+  Vec3 semi_axes{};
+  Rotation3 rotation{{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}};  // columns: the body axes in the world
+};
+struct Cylinder {  // finite, flat caps
+  Vec3 start{}, end{};
+  double radius = 0;
+};
+struct StlSurface {
+  std::string file;  // resolved path (relative names are resolved against the scene file)
+  double scale = 1;
+  Rotation3 rotation{{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}};
+  Vec3 translate{};
+};
+struct NurbsPatch {
+  std::array<int, 2> degree{};
+  std::vector<double> knots_u, knots_v;
+  std::vector<Vec3> control_points;  // u fastest
+  std::vector<double> weights;
+};
+struct NurbsSurface {
+  std::vector<NurbsPatch> patches;
+};
+
+using Shape = std::variant<Circle, Ellipse, Polygon, NurbsCurve, Sphere, Ellipsoid, Cylinder,
+                           StlSurface, NurbsSurface>;
+
+struct Inclusion {
+  Shape shape;
+  int phase = 2;   // phase id
+  int levels = 0;  // SAMR levels R_k
+};
+
+struct Phase {
+  int id = 1;
+  std::string name;
+  bool is_void = false;
+};
+
+struct SceneDesc {
+  std::string source;  // file the scene came from, for error messages ("" if built in code)
+  int dimension = 2;
+  std::array<double, 3> domain_min{}, domain_max{};
+  bool periodic = false;
+  double h = 1;    // background element size
+  int levels = 0;  // default SAMR levels of an inclusion
+  std::vector<Phase> phases;
+  int matrix_phase = 1;
+  std::vector<Inclusion> inclusions;
+
+  // Index of the phase with this id in `phases`, or -1.
+  int phase_index(int id) const {
+    for (std::size_t i = 0; i < phases.size(); ++i)
+      if (phases[i].id == id) return static_cast<int>(i);
+    return -1;
+  }
+};
+
+// Field path of inclusion i for error messages: "inclusions[i]".
+inline std::string inclusion_field(std::size_t i) { return "inclusions[" + std::to_string(i) + "]"; }
+
+}  // namespace cisamr::geometry

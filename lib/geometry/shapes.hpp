@@ -1,0 +1,38 @@
+#pragma once
+// Free functions on single shapes (no scene, no CGAL in this header): what packing,
+// partitioning and validation need. 2D shapes answer with areas/perimeters, 3D shapes
+// with volumes/surface areas. Implemented in shapes.cpp (2D) and shapes3.cpp (3D).
+#include <vector>
+
+#include "core/types.hpp"
+#include "geometry/scene.hpp"
+
+namespace cisamr::geometry {
+
+int shape_dimension(const Shape& s);  // 2 or 3
+
+// Tight axis-aligned bounding box (z components unused in 2D).
+Box3 shape_bounding_box(const Shape& s);
+
+// Area (2D) or volume (3D) of the closed region.
+double shape_measure(const Shape& s);
+
+// Perimeter (2D) or surface area (3D).
+double shape_boundary_measure(const Shape& s);
+
+// Points on the boundary, at most `spacing` apart along it (2D: a closed polyline in
+// order; 3D: a roughly uniform point cloud). For load measures and drawings.
+std::vector<Vec3> shape_boundary_samples(const Shape& s, double spacing);
+
+// Is a point inside the closed region (z ignored in 2D)?
+bool shape_contains(const Shape& s, const Vec3& p);
+
+// Do the two closed regions, each inflated by gap/2, intersect? Exact for circle/circle,
+// sphere/sphere, polygon/polygon; exact up to 1e-12 relative for ellipses, ellipsoids,
+// cylinders; conservative (may say true when within 1e-9 relative) for NURBS and STL.
+bool shapes_overlap(const Shape& a, const Shape& b, double gap = 0);
+
+// The same shape moved by `offset` (periodic images, packing moves).
+Shape translated(const Shape& s, const Vec3& offset);
+
+}  // namespace cisamr::geometry
