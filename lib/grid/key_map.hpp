@@ -1,0 +1,81 @@
+#pragma once
+// Open-addressing hash map from 64-bit lattice keys to local ids: the node registry.
+// Much faster than std::unordered_map for the millions of lookups of one mesh.
+#include <cstdint>
+#include <vector>
+
+namespace cisamr::grid {
+
+class KeyMap {
+ public:
+  static constexpr std::int32_t kNone = -1;
+
+  explicit KeyMap(std::size_t expected = 1024) { rehash(capacity_for(expected)); }
+
+  std::size_t size() const { return size_; }
+
+  std::int32_t find(std::uint64_t key) const {
+    std::size_t i = slot(key);
+    while (true) {
+      const std::int32_t v = values_[i];
+      if (v == kNone) return kNone;
+      if (keys_[i] == key) return v;
+      i = (i + 1) & mask_;
+    }
+  }
+
+  // Returns the id stored for key, inserting `value` if the key is new; `inserted` tells.
+  std::int32_t insert(std::uint64_t key, std::int32_t value, bool& inserted) {
+    if ((size_ + 1) * 2 > values_.size()) rehash(values_.size() * 2);
+    std::size_t i = slot(key);
+    while (true) {
+      const std::int32_t v = values_[i];
+      if (v == kNone) {
+        keys_[i] = key;
+        values_[i] = value;
+        ++size_;
+        inserted = true;
+        return value;
+      }
+      if (keys_[i] == key) {
+        inserted = false;
+        return v;
+      }
+      i = (i + 1) & mask_;
+    }
+  }
+
+ private:
+  std::vector<std::uint64_t> keys_;
+  std::vector<std::int32_t> values_;
+  std::size_t mask_ = 0, size_ = 0;
+
+  static std::size_t capacity_for(std::size_t n) {
+    std::size_t c = 16;
+    while (c < 2 * n) c <<= 1;
+    return c;
+  }
+  std::size_t slot(std::uint64_t key) const {
+    key ^= key >> 33;
+    key *= 0xff51afd7ed558ccdULL;
+    key ^= key >> 33;
+    return static_cast<std::size_t>(key) & mask_;
+  }
+  void rehash(std::size_t capacity) {
+    std::vector<std::uint64_t> old_keys;
+    std::vector<std::int32_t> old_values;
+    old_keys.swap(keys_);
+    old_values.swap(values_);
+    keys_.assign(capacity, 0);
+    values_.assign(capacity, kNone);
+    mask_ = capacity - 1;
+    size_ = 0;
+    for (std::size_t i = 0; i < old_values.size(); ++i)
+      if (old_values[i] != kNone) {
+        bool inserted;
+        insert(old_keys[i], old_values[i], inserted);
+      }
+  }
+};
+
+}  // namespace cisamr::grid

@@ -1,0 +1,65 @@
+#pragma once
+// Mesh files (DESIGN.md §7). Writers pick the format from the extension and write through
+// AtomicFile; readers accept our own output and the common dialects of other tools.
+//
+//   .vtu   VTK XML UnstructuredGrid, raw appended binary (UInt64 headers, little endian):
+//          cell data phase (Int32), partition (Int32), aspect_ratio (Float64);
+//          point data global_id (Int64); points always with 3 components.
+//   .msh   Gmsh 4.1 ASCII: one physical group and one entity per phase (tag = phase id).
+//   .inp   Abaqus: *NODE, then one *ELEMENT block per phase, TYPE=CPS3|C3D4, ELSET=name.
+//   .mesh  Medit/INRIA, MeshVersionFormatted 2: element reference = phase id.
+//
+// Numbers in ASCII formats are printed with the shortest text that reads back to the same
+// double, so every format round-trips coordinates bit for bit.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "geometry/scene.hpp"
+#include "mesh/simplex_mesh.hpp"
+
+namespace cisamr::io {
+
+enum class MeshFormat { vtu, msh, inp, medit };
+
+// The format named by the file's extension. Throws InputError(path, "", "unknown mesh
+// format '.xyz' (use .vtu, .msh, .inp or .mesh)"). Cheap: call it before meshing to fail early.
+MeshFormat mesh_format_of(const std::string& path);
+
+struct MeshWriteOptions {
+  // Per-cell aspect ratio for the VTU "aspect_ratio" array; computed when empty.
+  std::vector<double> cell_aspect_ratio;
+};
+
+// Writes `m` in the format of `path`'s extension. `phases` gives the names (msh physical
+// names, inp ELSET names); a phase id used by a cell but missing there is named
+// "phase<id>". Empty cell_partition / node_global_id are written as 0 / the node index.
+// Throws InputError for an unknown extension or an unwritable path; the destination is
+// either the complete new file or untouched.
+template <int Dim>
+void write_mesh(const std::string& path, const mesh::SimplexMesh<Dim>& m,
+                const std::vector<geometry::Phase>& phases, const MeshWriteOptions& options = {});
+
+// The VTU writer alone (one piece): what a parallel run writes per rank before the .pvtu.
+template <int Dim>
+void write_vtu(const std::string& path, const mesh::SimplexMesh<Dim>& m,
+               const MeshWriteOptions& options = {});
+
+struct LoadedMesh {
+  int dimension = 0;   // 2 or 3: which of mesh2 / mesh3 holds the mesh
+  mesh::Mesh2 mesh2;
+  mesh::Mesh3 mesh3;
+  std::vector<geometry::Phase> phases;  // every phase id used by a cell, ascending
+};
+
+// Reads .vtu (appended raw or base64, inline base64 or ascii DataArrays; UInt32 or UInt64
+// headers; no compression), .msh (Gmsh 4.1 and 2.2 ASCII), .mesh (Medit ASCII) and .inp
+// (Abaqus, as written above). Triangles or tetrahedra only: points and lines (and boundary
+// triangles of a tetrahedral mesh) are skipped, any other element type is an InputError.
+// The mesh is 2D when its cells are triangles and every z is 0. Phases come from the
+// phase array / physical tags / references / ELSETs (1 when absent), names from physical
+// names or ELSET names ("phase<id>" otherwise); absent global ids are the node index,
+// absent partitions 0.
+LoadedMesh read_mesh(const std::string& path);
+
+}  // namespace cisamr::io

@@ -1,0 +1,456 @@
+// Mesh writers: VTU (raw appended binary), Gmsh MSH 4.1, Abaqus INP, Medit MESH.
+// Binary arrays are written straight from the mesh's vectors (or in fixed-size chunks when
+// they must be converted); ASCII goes through TextWriter, which formats with std::to_chars
+// into one large buffer. No iostreams.
+#include <algorithm>
+#include <bit>
+#include <charconv>
+#include <cstring>
+#include <filesystem>
+#include <limits>
+#include <stdexcept>
+#include <string_view>
+
+#include "core/error.hpp"
+#include "io/atomic_file.hpp"
+#include "io/mesh_io.hpp"
+#include "mesh/metrics.hpp"
+
+namespace cisamr::io {
+namespace {
+
+static_assert(std::endian::native == std::endian::little,
+              "the VTU writer stores arrays in host order and declares LittleEndian");
+
+// ASCII output: numbers are formatted into a large buffer that goes to the file in one write.
+class TextWriter {
+ public:
+  explicit TextWriter(AtomicFile& file) : file_(file), buffer_(kCapacity) {}
+  ~TextWriter() = default;
+
+  TextWriter& operator<<(std::string_view text) {
+    if (text.size() > kSlack) {
+      flush();
+      file_.write(text);
+      return *this;
+    }
+    make_room();
+    std::memcpy(buffer_.data() + used_, text.data(), text.size());
+    used_ += text.size();
+    return *this;
+  }
+  TextWriter& operator<<(char c) {
+    make_room();
+    buffer_[used_++] = c;
+    return *this;
+  }
+  TextWriter& integer(long long value) {
+    make_room();
+    used_ = static_cast<std::size_t>(
+        std::to_chars(buffer_.data() + used_, buffer_.data() + buffer_.size(), value).ptr -
+        buffer_.data());
+    return *this;
+  }
+  // Shortest text that reads back to the same double.
+  TextWriter& real(double value) {
+    make_room();
+    used_ = static_cast<std::size_t>(
+        std::to_chars(buffer_.data() + used_, buffer_.data() + buffer_.size(), value).ptr -
+        buffer_.data());
+    return *this;
+  }
+  void flush() {
+    file_.write(buffer_.data(), used_);
+    used_ = 0;
+  }
+
+ private:
+  static constexpr std::size_t kCapacity = std::size_t{1} << 22;
+  static constexpr std::size_t kSlack = 256;  // room guaranteed for one item
+  void make_room() {
+    if (used_ + kSlack > buffer_.size()) flush();
+  }
+  AtomicFile& file_;
+  std::vector<char> buffer_;
+  std::size_t used_ = 0;
+};
+
+template <int Dim>
+void check_mesh(const mesh::SimplexMesh<Dim>& m) {
+  const std::size_t cells = m.cell_count();
+  if (m.coords.size() % Dim != 0 || m.cell_nodes.size() != cells * (Dim + 1) ||
+      (!m.cell_partition.empty() && m.cell_partition.size() != cells) ||
+      (!m.node_global_id.empty() && m.node_global_id.size() != m.node_count()))
+    throw std::invalid_argument("write_mesh: inconsistent array sizes in the mesh");
+  if (m.node_count() > static_cast<std::size_t>(std::numeric_limits<LocalId>::max()))
+    throw std::invalid_argument("write_mesh: too many nodes for LocalId");
+}
+
+std::string phase_name(const std::vector<geometry::Phase>& phases, int id) {
+  for (const auto& p : phases)
+    if (p.id == id) return p.name;
+  return "phase" + std::to_string(id);
+}
+
+// Cells grouped by phase (ascending id), original order kept inside a group.
+struct PhaseGroups {
+  std::vector<int> ids;                 // distinct phase ids, ascending
+  std::vector<std::size_t> begin;       // group g = order[begin[g] .. begin[g+1])
+  std::vector<std::size_t> order;       // cell indices
+};
+
+PhaseGroups group_by_phase(const std::vector<std::int32_t>& cell_phase) {
+  PhaseGroups groups;
+  groups.ids.assign(cell_phase.begin(), cell_phase.end());
+  std::sort(groups.ids.begin(), groups.ids.end());
+  groups.ids.erase(std::unique(groups.ids.begin(), groups.ids.end()), groups.ids.end());
+  std::vector<std::size_t> group_of(cell_phase.size());
+  groups.begin.assign(groups.ids.size() + 1, 0);
+  for (std::size_t c = 0; c < cell_phase.size(); ++c) {
+    const auto g = static_cast<std::size_t>(
+        std::lower_bound(groups.ids.begin(), groups.ids.end(), cell_phase[c]) - groups.ids.begin());
+    group_of[c] = g;
+    ++groups.begin[g + 1];
+  }
+  for (std::size_t g = 0; g < groups.ids.size(); ++g) groups.begin[g + 1] += groups.begin[g];
+  groups.order.resize(cell_phase.size());
+  std::vector<std::size_t> next(groups.begin.begin(), groups.begin.end() - 1);
+  for (std::size_t c = 0; c < cell_phase.size(); ++c) groups.order[next[group_of[c]]++] = c;
+  return groups;
+}
+
+// ------------------------------------------------------------------------------ VTU
+
+// One appended array: an 8-byte size header then the bytes, produced in chunks.
+template <class T, class Fill>
+void write_array_chunked(AtomicFile& file, std::size_t count, Fill fill) {
+  const std::uint64_t bytes = count * sizeof(T);
+  file.write(&bytes, sizeof bytes);
+  constexpr std::size_t kChunk = 1 << 16;
+  std::vector<T> chunk(std::min(count, kChunk));
+  for (std::size_t first = 0; first < count; first += kChunk) {
+    const std::size_t n = std::min(kChunk, count - first);
+    for (std::size_t i = 0; i < n; ++i) chunk[i] = fill(first + i);
+    file.write(chunk.data(), n * sizeof(T));
+  }
+}
+template <class T>
+void write_array_raw(AtomicFile& file, const std::vector<T>& values) {
+  const std::uint64_t bytes = values.size() * sizeof(T);
+  file.write(&bytes, sizeof bytes);
+  file.write(values.data(), bytes);
+}
+
+template <int Dim>
+void write_vtu_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m,
+                    const MeshWriteOptions& options) {
+  constexpr int kCorners = Dim + 1;
+  const std::size_t nodes = m.node_count(), cells = m.cell_count();
+  if (!options.cell_aspect_ratio.empty() && options.cell_aspect_ratio.size() != cells)
+    throw std::invalid_argument("write_mesh: cell_aspect_ratio has the wrong size");
+  const bool wide_offsets =
+      cells * kCorners > static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max());
+  const std::size_t offset_size = wide_offsets ? 8 : 4;
+
+  struct Array {
+    const char* where;  // PointData, CellData, Points, Cells
+    const char* type;
+    const char* name;
+    int components;
+    std::size_t bytes;
+  };
+  const Array arrays[] = {
+      {"PointData", "Int64", "global_id", 1, nodes * 8},
+      {"CellData", "Int32", "phase", 1, cells * 4},
+      {"CellData", "Int32", "partition", 1, cells * 4},
+      {"CellData", "Float64", "aspect_ratio", 1, cells * 8},
+      {"Points", "Float64", "Points", 3, nodes * 3 * 8},
+      {"Cells", "Int32", "connectivity", 1, cells * kCorners * 4},
+      {"Cells", wide_offsets ? "Int64" : "Int32", "offsets", 1, cells * offset_size},
+      {"Cells", "UInt8", "types", 1, cells},
+  };
+
+  std::string xml;
+  xml += "<?xml version=\"1.0\"?>\n";
+  xml += "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" "
+         "header_type=\"UInt64\">\n";
+  xml += "  <UnstructuredGrid>\n";
+  xml += "    <Piece NumberOfPoints=\"" + std::to_string(nodes) + "\" NumberOfCells=\"" +
+         std::to_string(cells) + "\">\n";
+  std::uint64_t offset = 0;
+  std::string_view open_section;
+  for (const Array& a : arrays) {
+    if (open_section != a.where) {
+      if (!open_section.empty()) xml += "      </" + std::string(open_section) + ">\n";
+      open_section = a.where;
+      xml += "      <" + std::string(open_section) +
+             (open_section == "CellData" ? " Scalars=\"phase\"" : "") + ">\n";
+    }
+    xml += "        <DataArray type=\"" + std::string(a.type) + "\" Name=\"" + a.name + "\"";
+    if (a.components != 1)
+      xml += " NumberOfComponents=\"" + std::to_string(a.components) + "\"";
+    xml += " format=\"appended\" offset=\"" + std::to_string(offset) + "\"/>\n";
+    offset += 8 + a.bytes;
+  }
+  xml += "      </" + std::string(open_section) + ">\n";
+  xml += "    </Piece>\n  </UnstructuredGrid>\n  <AppendedData encoding=\"raw\">\n   _";
+  file.write(xml);
+
+  // global_id
+  if (m.node_global_id.empty())
+    write_array_chunked<std::int64_t>(file, nodes, [](std::size_t i) { return std::int64_t(i); });
+  else
+    write_array_raw(file, m.node_global_id);
+  write_array_raw(file, m.cell_phase);
+  if (m.cell_partition.empty())
+    write_array_chunked<std::int32_t>(file, cells, [](std::size_t) { return 0; });
+  else
+    write_array_raw(file, m.cell_partition);
+  if (options.cell_aspect_ratio.empty())
+    write_array_chunked<double>(file, cells,
+                                [&](std::size_t c) { return mesh::cell_aspect_ratio(m, c); });
+  else
+    write_array_raw(file, options.cell_aspect_ratio);
+  if constexpr (Dim == 3) {
+    write_array_raw(file, m.coords);
+  } else {
+    write_array_chunked<double>(file, nodes * 3, [&](std::size_t i) {
+      const std::size_t node = i / 3, axis = i % 3;
+      return axis < 2 ? m.coords[node * 2 + axis] : 0.0;
+    });
+  }
+  write_array_raw(file, m.cell_nodes);
+  if (wide_offsets)
+    write_array_chunked<std::int64_t>(
+        file, cells, [](std::size_t c) { return std::int64_t(c + 1) * kCorners; });
+  else
+    write_array_chunked<std::int32_t>(
+        file, cells, [](std::size_t c) { return std::int32_t(c + 1) * kCorners; });
+  const std::uint8_t cell_type = Dim == 2 ? 5 : 10;  // VTK_TRIANGLE, VTK_TETRA
+  write_array_chunked<std::uint8_t>(file, cells, [&](std::size_t) { return cell_type; });
+  file.write("\n  </AppendedData>\n</VTKFile>\n");
+}
+
+// ------------------------------------------------------------------------------ MSH 4.1
+
+template <int Dim>
+void write_msh_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m,
+                    const std::vector<geometry::Phase>& phases) {
+  constexpr int kCorners = Dim + 1;
+  const std::size_t nodes = m.node_count(), cells = m.cell_count();
+  const PhaseGroups groups = group_by_phase(m.cell_phase);
+  TextWriter out(file);
+  out << "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n";
+
+  out << "$PhysicalNames\n";
+  out.integer(static_cast<long long>(groups.ids.size())) << '\n';
+  for (int id : groups.ids) {
+    std::string name = phase_name(phases, id);
+    std::replace(name.begin(), name.end(), '"', '\'');
+    out.integer(Dim) << ' ';
+    out.integer(id) << " \"" << name << "\"\n";
+  }
+  out << "$EndPhysicalNames\n";
+
+  // One surface (2D) or volume (3D) entity per phase, tagged with the phase id; a mesh
+  // without cells still needs an entity to hold its nodes.
+  std::vector<int> entity_tags = groups.ids;
+  const bool placeholder_entity = entity_tags.empty() && nodes > 0;
+  if (placeholder_entity) entity_tags.push_back(1);
+  out << "$Entities\n" << (Dim == 2 ? "0 0 " : "0 0 0 ");
+  out.integer(static_cast<long long>(entity_tags.size())) << (Dim == 2 ? " 0\n" : "\n");
+  for (std::size_t g = 0; g < entity_tags.size(); ++g) {
+    double lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
+    if (!placeholder_entity) {
+      for (int d = 0; d < Dim; ++d) {
+        lo[d] = std::numeric_limits<double>::infinity();
+        hi[d] = -std::numeric_limits<double>::infinity();
+      }
+      for (std::size_t i = groups.begin[g]; i < groups.begin[g + 1]; ++i) {
+        const LocalId* corners = m.cell(groups.order[i]);
+        for (int k = 0; k < kCorners; ++k)
+          for (int d = 0; d < Dim; ++d) {
+            const double x = m.coords[static_cast<std::size_t>(corners[k]) * Dim + d];
+            lo[d] = std::min(lo[d], x);
+            hi[d] = std::max(hi[d], x);
+          }
+      }
+    }
+    out.integer(entity_tags[g]);
+    for (double x : lo) out << ' ', out.real(x);
+    for (double x : hi) out << ' ', out.real(x);
+    if (placeholder_entity)
+      out << " 0 0\n";
+    else
+      out << " 1 ", out.integer(entity_tags[g]) << " 0\n";
+  }
+  out << "$EndEntities\n";
+
+  // All nodes in one block on the first entity (a node shared by phases has one home).
+  out << "$Nodes\n";
+  if (nodes == 0) {
+    out << "0 0 0 0\n";
+  } else {
+    out << "1 ";
+    out.integer(static_cast<long long>(nodes)) << " 1 ";
+    out.integer(static_cast<long long>(nodes)) << '\n';
+    out.integer(Dim) << ' ';
+    out.integer(entity_tags.front()) << " 0 ";
+    out.integer(static_cast<long long>(nodes)) << '\n';
+    for (std::size_t n = 0; n < nodes; ++n) out.integer(static_cast<long long>(n + 1)) << '\n';
+    for (std::size_t n = 0; n < nodes; ++n) {
+      for (int d = 0; d < Dim; ++d) {
+        if (d > 0) out << ' ';
+        out.real(m.coords[n * Dim + d]);
+      }
+      out << (Dim == 2 ? " 0\n" : "\n");
+    }
+  }
+  out << "$EndNodes\n";
+
+  // Element tag = cell index + 1, so that reading restores the original order.
+  out << "$Elements\n";
+  out.integer(static_cast<long long>(groups.ids.size())) << ' ';
+  out.integer(static_cast<long long>(cells)) << ' ';
+  out.integer(cells > 0 ? 1 : 0) << ' ';
+  out.integer(static_cast<long long>(cells)) << '\n';
+  for (std::size_t g = 0; g < groups.ids.size(); ++g) {
+    out.integer(Dim) << ' ';
+    out.integer(groups.ids[g]) << (Dim == 2 ? " 2 " : " 4 ");
+    out.integer(static_cast<long long>(groups.begin[g + 1] - groups.begin[g])) << '\n';
+    for (std::size_t i = groups.begin[g]; i < groups.begin[g + 1]; ++i) {
+      const std::size_t c = groups.order[i];
+      out.integer(static_cast<long long>(c + 1));
+      const LocalId* corners = m.cell(c);
+      for (int k = 0; k < kCorners; ++k) out << ' ', out.integer(corners[k] + 1LL);
+      out << '\n';
+    }
+  }
+  out << "$EndElements\n";
+  out.flush();
+}
+
+// ------------------------------------------------------------------------------ INP
+
+// Abaqus labels: a letter first, then letters, digits and underscores.
+std::string abaqus_label(const std::string& name) {
+  std::string label;
+  for (char c : name) {
+    const bool ok = (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') ||
+                    c == '_' || c == '-';
+    label += ok ? c : '_';
+  }
+  if (label.empty() || !((label[0] >= 'A' && label[0] <= 'Z') || (label[0] >= 'a' && label[0] <= 'z')))
+    label = "P_" + label;
+  return label.substr(0, 80);
+}
+
+template <int Dim>
+void write_inp_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m,
+                    const std::vector<geometry::Phase>& phases) {
+  constexpr int kCorners = Dim + 1;
+  const std::size_t nodes = m.node_count(), cells = m.cell_count();
+  const PhaseGroups groups = group_by_phase(m.cell_phase);
+  TextWriter out(file);
+  out << "*HEADING\ncisamr mesh: ";
+  out.integer(static_cast<long long>(nodes)) << " nodes, ";
+  out.integer(static_cast<long long>(cells)) << (Dim == 2 ? " triangles\n" : " tetrahedra\n");
+  out << "*NODE\n";
+  for (std::size_t n = 0; n < nodes; ++n) {
+    out.integer(static_cast<long long>(n + 1));
+    for (int d = 0; d < Dim; ++d) out << ", ", out.real(m.coords[n * Dim + d]);
+    out << '\n';
+  }
+  for (std::size_t g = 0; g < groups.ids.size(); ++g) {
+    std::string name = phase_name(phases, groups.ids[g]);
+    std::replace(name.begin(), name.end(), '\n', ' ');
+    // Our reader takes the phase id and full name from this comment; Abaqus ignores it.
+    out << "** cisamr phase ";
+    out.integer(groups.ids[g]) << ' ' << name << '\n';
+    out << (Dim == 2 ? "*ELEMENT, TYPE=CPS3, ELSET=" : "*ELEMENT, TYPE=C3D4, ELSET=")
+        << abaqus_label(name) << '\n';
+    for (std::size_t i = groups.begin[g]; i < groups.begin[g + 1]; ++i) {
+      const std::size_t c = groups.order[i];
+      out.integer(static_cast<long long>(c + 1));
+      const LocalId* corners = m.cell(c);
+      for (int k = 0; k < kCorners; ++k) out << ", ", out.integer(corners[k] + 1LL);
+      out << '\n';
+    }
+  }
+  out.flush();
+}
+
+// ------------------------------------------------------------------------------ Medit
+
+template <int Dim>
+void write_medit_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m) {
+  constexpr int kCorners = Dim + 1;
+  const std::size_t nodes = m.node_count(), cells = m.cell_count();
+  TextWriter out(file);
+  out << "MeshVersionFormatted 2\n\nDimension ";
+  out.integer(Dim) << "\n\nVertices\n";
+  out.integer(static_cast<long long>(nodes)) << '\n';
+  for (std::size_t n = 0; n < nodes; ++n) {
+    for (int d = 0; d < Dim; ++d) out.real(m.coords[n * Dim + d]) << ' ';
+    out << "0\n";
+  }
+  out << (Dim == 2 ? "\nTriangles\n" : "\nTetrahedra\n");
+  out.integer(static_cast<long long>(cells)) << '\n';
+  for (std::size_t c = 0; c < cells; ++c) {
+    const LocalId* corners = m.cell(c);
+    for (int k = 0; k < kCorners; ++k) out.integer(corners[k] + 1LL) << ' ';
+    out.integer(m.cell_phase[c]) << '\n';
+  }
+  out << "\nEnd\n";
+  out.flush();
+}
+
+}  // namespace
+
+MeshFormat mesh_format_of(const std::string& path) {
+  std::string extension = std::filesystem::path(path).extension().string();
+  std::string lower = extension;
+  std::transform(lower.begin(), lower.end(), lower.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (lower == ".vtu") return MeshFormat::vtu;
+  if (lower == ".msh") return MeshFormat::msh;
+  if (lower == ".inp") return MeshFormat::inp;
+  if (lower == ".mesh") return MeshFormat::medit;
+  throw InputError(path, "",
+                   (extension.empty() ? std::string("no file extension")
+                                      : "unknown mesh format '" + extension + "'") +
+                       " (use .vtu, .msh, .inp or .mesh)");
+}
+
+template <int Dim>
+void write_vtu(const std::string& path, const mesh::SimplexMesh<Dim>& m,
+               const MeshWriteOptions& options) {
+  check_mesh(m);
+  AtomicFile file(path);
+  write_vtu_file(file, m, options);
+  file.commit();
+}
+
+template <int Dim>
+void write_mesh(const std::string& path, const mesh::SimplexMesh<Dim>& m,
+                const std::vector<geometry::Phase>& phases, const MeshWriteOptions& options) {
+  const MeshFormat format = mesh_format_of(path);
+  check_mesh(m);
+  AtomicFile file(path);
+  switch (format) {
+    case MeshFormat::vtu: write_vtu_file(file, m, options); break;
+    case MeshFormat::msh: write_msh_file(file, m, phases); break;
+    case MeshFormat::inp: write_inp_file(file, m, phases); break;
+    case MeshFormat::medit: write_medit_file(file, m); break;
+  }
+  file.commit();
+}
+
+template void write_mesh<2>(const std::string&, const mesh::Mesh2&,
+                            const std::vector<geometry::Phase>&, const MeshWriteOptions&);
+template void write_mesh<3>(const std::string&, const mesh::Mesh3&,
+                            const std::vector<geometry::Phase>&, const MeshWriteOptions&);
+template void write_vtu<2>(const std::string&, const mesh::Mesh2&, const MeshWriteOptions&);
+template void write_vtu<3>(const std::string&, const mesh::Mesh3&, const MeshWriteOptions&);
+
+}  // namespace cisamr::io

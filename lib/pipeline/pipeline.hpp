@@ -1,0 +1,44 @@
+#pragma once
+// The sequential mesher: box (+ghost) → grid → SAMR → r-adaptivity → subdivision → mesh.
+// The same call meshes the whole domain (one box, no ghost) or one partition's box with
+// its ghost layer; the parallel mesher runs it unchanged on every partition (DESIGN.md §3).
+#include <cstdint>
+
+#include "core/timer.hpp"
+#include "geometry/oracle2.hpp"
+#include "grid/lattice.hpp"
+#include "mesh/simplex_mesh.hpp"
+
+namespace cisamr::pipeline {
+
+struct Options {
+  double alpha = 0.5;    // r-adaptivity threshold (fraction of the edge length)
+  int extra_levels = 3;  // levels beyond the largest requested one that rule R2 may use
+};
+
+struct Stats {
+  std::int64_t coarse_cells = 0, leaves = 0, refinements = 0;
+  std::int64_t lattice_nodes = 0, snapped_nodes = 0;
+  std::int64_t cut_quads = 0, double_diagonal = 0, hanging_cells = 0, unresolved = 0;
+  PhaseTimes times;
+};
+
+struct Result2 {
+  mesh::Mesh2 mesh;
+  Stats stats;
+};
+
+// The global lattice of a 2D scene: coarse cells of size h over the domain and
+// Lmax = max(requested levels) + extra_levels.
+grid::Lattice2 make_lattice2(const geometry::Oracle2& oracle, const Options& options);
+
+// Meshes the coarse cells of `box` (global coarse indices), using `ghost` extra coarse
+// cells on each side (clipped to the domain) so that decisions inside the box are those
+// of the whole-domain run. Cells of void phases are dropped; unused nodes removed.
+Result2 run2(const geometry::Oracle2& oracle, const grid::Lattice2& lattice, const grid::CellRange<2>& box,
+             int ghost, const Options& options, int partition_id = 0);
+
+// The whole domain in one box.
+Result2 mesh2(const geometry::Oracle2& oracle, const Options& options = {});
+
+}  // namespace cisamr::pipeline

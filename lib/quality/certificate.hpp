@@ -1,0 +1,76 @@
+#pragma once
+// The certification result of a mesh (aspect-ratio statistics + conformity + optional phase
+// fidelity) and its renderings: JSON, a self-contained HTML page, a short text summary.
+// Pure functions returning strings; the caller writes them (io::AtomicFile).
+#include <cstddef>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "core/types.hpp"
+#include "mesh/simplex_mesh.hpp"
+#include "quality/quality.hpp"
+
+namespace cisamr::geometry {
+class Oracle2;
+struct SceneDesc;
+}  // namespace cisamr::geometry
+
+namespace cisamr::quality {
+
+// DESIGN.md §2.2: 3 in 2D, 5 in 3D.
+inline double default_bound(int dimension) { return dimension == 2 ? 3.0 : 5.0; }
+
+// With voids the meshed measure differs from domain minus the exact void measure by the
+// polygonal approximation of the void boundaries, so only gross errors are caught by the
+// measure; holes are then caught by the fidelity check (open facets must lie on a void).
+inline constexpr double kVoidMeasureTolerance = 0.05;
+
+struct CertifyOptions {
+  double bound = 0;           // <= 0: default_bound(dimension)
+  int worst_count = 20;       // rows of the worst-elements table
+  double expected_measure = -1;  // < 0: not checked (used only without a scene)
+  bool allow_inner_boundary = false;  // used only without a scene
+  double measure_tolerance = kDefaultMeasureTolerance;
+  double fidelity_tolerance = -1;  // < 0: default_fidelity_tolerance(scene)
+};
+
+struct Certificate {
+  std::string mesh_source;   // file names for the report ("" if none)
+  std::string scene_source;
+  int dimension = 0;
+  std::size_t node_count = 0, cell_count = 0;
+  std::vector<std::pair<int, std::size_t>> cells_per_phase;  // (phase id, cells), by id
+  std::vector<std::pair<int, std::string>> phase_names;      // from the scene, if any
+  Box3 domain;  // z unused in 2D
+  bool domain_from_scene = false;  // else the mesh's bounding box
+  AspectStats aspect;
+  ConformityReport conformity;
+  std::optional<FidelityReport> fidelity;
+  std::vector<std::string> notes;  // what was not checked and why
+
+  bool quality_ok() const { return aspect.above_bound == 0; }
+  bool passed() const {
+    return quality_ok() && conformity.ok && (!fidelity || fidelity->ok);
+  }
+};
+
+// Without a scene: the given domain box (for boundary facets) and options.
+template <int Dim>
+Certificate certify(const mesh::SimplexMesh<Dim>& m, const Box<Dim>& domain, const CertifyOptions& options);
+
+// Against a scene, 2D: domain from the scene, expected measure = domain − voids (exact void
+// areas from the oracle), inner boundary allowed iff the scene has a void phase, plus the
+// phase-fidelity check. options.expected_measure/allow_inner_boundary are ignored.
+Certificate certify(const mesh::Mesh2& m, const geometry::Oracle2& oracle, const CertifyOptions& options);
+
+// Against a scene, 3D: domain from the scene; expected measure = domain volume when the
+// scene has no void (not checked otherwise); no fidelity check yet (no 3D oracle).
+Certificate certify(const mesh::Mesh3& m, const geometry::SceneDesc& scene, const CertifyOptions& options);
+
+std::string certificate_json(const Certificate& c);     // format "cisamr-certificate/1"
+std::string certificate_html(const Certificate& c);     // one page, inline SVG and CSS
+std::string certificate_summary(const Certificate& c);  // a few lines for the terminal
+
+}  // namespace cisamr::quality

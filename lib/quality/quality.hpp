@@ -1,0 +1,142 @@
+#pragma once
+// Quality metrics and mesh checks (DESIGN.md §2 invariants 1-3): aspect-ratio statistics,
+// conformity (topology + measure) and phase fidelity against the scene's geometry.
+// Pure functions: they read a mesh and return a report; nothing is printed or thrown for a
+// bad mesh (a bad mesh is the answer, not an error). See lib/quality/README.md.
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/types.hpp"
+#include "mesh/simplex_mesh.hpp"
+
+namespace cisamr::geometry {
+class Oracle2;
+struct SceneDesc;
+}  // namespace cisamr::geometry
+
+namespace cisamr::quality {
+
+// ---------------------------------------------------------------------------------------
+// Aspect ratio (Verdict definition, mesh/metrics.hpp) and angles.
+// ---------------------------------------------------------------------------------------
+
+// Width of the fixed histogram bins; edges are 1.0, 1.1, 1.2, ...
+inline constexpr double kHistogramBinWidth = 0.1;
+// The regular bins stop at this aspect ratio at the latest; anything above goes to the
+// overflow bin (so a mesh with a 1e9 sliver does not produce 1e10 bins).
+inline constexpr double kHistogramMaxEdge = 100.0;
+
+struct AspectStats {
+  double max = 0;   // +inf when a cell is degenerate
+  double mean = 0;  // over the cells with a finite aspect ratio
+  std::size_t count = 0;        // cells
+  std::size_t above_bound = 0;  // cells with aspect ratio > bound (degenerate ones included)
+  double bound = 0;
+  // Regular bin i counts [bin_edges[i], bin_edges[i+1]); the last entry of `histogram`
+  // (index bin_edges.size()-1) is the overflow bin: aspect ratio >= bin_edges.back(),
+  // +inf included. bin_edges.back() > max(bound, max) unless max exceeds kHistogramMaxEdge.
+  // Values below 1 (round-off on equilateral cells) count in the first bin.
+  std::vector<double> bin_edges;
+  std::vector<std::size_t> histogram;  // bin_edges.size() entries
+  struct Worst {
+    std::size_t cell = 0;
+    double aspect_ratio = 0;
+    std::array<double, 3> centroid{};  // z = 0 in 2D
+    int phase = 0;                     // phase id
+  };
+  std::vector<Worst> worst;  // worst first; ties broken by smaller cell id
+  // 2D: the smallest and largest triangle angle; 3D: the smallest and largest dihedral
+  // angle. Cells with a zero-length edge are skipped. 0/0 for an empty mesh.
+  double min_angle_deg = 0, max_angle_deg = 0;
+};
+
+// One pass over the cells; O(cells), no allocation proportional to the mesh.
+template <int Dim>
+AspectStats aspect_statistics(const mesh::SimplexMesh<Dim>& m, double bound, int worst_count = 20);
+
+// ---------------------------------------------------------------------------------------
+// Conformity (DESIGN.md §2.1).
+// ---------------------------------------------------------------------------------------
+
+// Relative tolerances, documented in README.md.
+inline constexpr double kNearDuplicateTolerance = 1e-12;  // × domain diagonal
+inline constexpr double kOnBoxTolerance = 1e-10;          // × domain diagonal
+inline constexpr double kDegenerateTolerance = 1e-12;     // |measure| <= this × l_max^Dim
+inline constexpr double kOnFacetTolerance = 1e-9;         // × facet's longest edge
+inline constexpr double kDefaultMeasureTolerance = 1e-9;  // relative measure error
+
+struct ConformityReport {
+  bool ok = false;
+  std::size_t duplicate_nodes = 0;   // nodes within 1e-12·diagonal of a lower-numbered node
+  std::size_t degenerate_cells = 0;  // |signed measure| <= 1e-12 · l_max^Dim
+  std::size_t inverted_cells = 0;    // signed measure < 0 (and not degenerate)
+  std::size_t bad_node_references = 0;  // cells naming a node id out of range (skipped)
+  std::size_t non_manifold_facets = 0;  // shared by > 2 cells
+  std::size_t mismatched_orientation_facets = 0;  // shared by 2 cells with the same orientation
+  std::size_t open_facets_inside = 0;  // shared by one cell, not on the domain box (error)
+  // Open facets not on the domain box when allow_inner_boundary: void interfaces. Not an
+  // error here; check_fidelity verifies they lie on a void.
+  std::size_t inner_boundary_facets = 0;
+  std::size_t boundary_facets = 0;  // open facets on the domain box (fine)
+  std::size_t hanging_nodes = 0;    // nodes lying inside another open facet (T-junctions)
+  std::size_t unused_nodes = 0;     // referenced by no cell
+  double measure = 0;               // Σ |cell measure|
+  double expected_measure = -1;     // < 0: not checked
+  double measure_error = 0;         // |measure - expected| / expected (0 if not checked)
+  double measure_tolerance = kDefaultMeasureTolerance;
+  std::vector<std::string> examples;  // first few problems, with ids and coordinates
+};
+
+// expected_measure: the domain's measure minus the voids' (< 0: do not check).
+// allow_inner_boundary: the scene has voids, so open facets inside the box are expected.
+// measure_tolerance: relative; a mesh of curved voids differs from the exact void measure
+// by its discretisation error, so callers with voids pass a looser one.
+template <int Dim>
+ConformityReport check_conformity(const mesh::SimplexMesh<Dim>& m, const Box<Dim>& domain,
+                                  double expected_measure, bool allow_inner_boundary,
+                                  double measure_tolerance = kDefaultMeasureTolerance);
+
+// ---------------------------------------------------------------------------------------
+// Phase fidelity (DESIGN.md §2.3), 2D.
+// ---------------------------------------------------------------------------------------
+
+struct FidelityReport {
+  bool ok = false;
+  double tolerance = 0;
+  // Node whose cells are all of one phase k, farther than tol from phase k's closure.
+  std::size_t nodes_off_phase = 0;
+  // Node shared by cells of two or more phases, farther than tol from one of them.
+  std::size_t interface_nodes_off_interface = 0;
+  // Node of an open facet inside the domain box (void interface) farther than tol from
+  // every void phase.
+  std::size_t boundary_nodes_off_void = 0;
+  std::size_t cells_unknown_phase = 0;  // cell phase id not in the scene, or a void phase
+  double max_deviation = 0;             // largest distance found in the checks above
+  // Indexed by the scene's phase index. Void phases are not meshed: their phase_measure
+  // is 0 and their relative_error NaN.
+  std::vector<int> phase_id;
+  std::vector<std::string> phase_name;
+  std::vector<bool> phase_is_void;
+  std::vector<double> phase_measure, exact_phase_measure, relative_error;
+  std::vector<std::string> examples;
+};
+
+// 1e-9 × the domain diagonal (DESIGN.md §2.3, analytic shapes).
+double default_fidelity_tolerance(const geometry::SceneDesc& scene);
+
+FidelityReport check_fidelity(const mesh::Mesh2& m, const geometry::Oracle2& oracle, double tol);
+
+// ---------------------------------------------------------------------------------------
+// Small helpers shared by the certificate and the command.
+// ---------------------------------------------------------------------------------------
+
+template <int Dim>
+Box<Dim> bounding_box(const mesh::SimplexMesh<Dim>& m);  // {0,0} box for an empty mesh
+
+template <int Dim>
+double box_diagonal(const Box<Dim>& b);
+
+}  // namespace cisamr::quality

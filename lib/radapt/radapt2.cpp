@@ -1,0 +1,126 @@
+#include "radapt/radapt2.hpp"
+
+#include <bit>
+#include <limits>
+
+namespace cisamr::radapt {
+namespace {
+
+using grid::LatticeKey;
+
+int single_phase(PhaseMask m) { return std::popcount(m) == 1 ? std::countr_zero(m) : -1; }
+
+}  // namespace
+
+Nodes2 snap2(const geometry::Oracle2& oracle, const samr::RefinedGrid2& g, const Options& options) {
+  const grid::QuadForest& forest = g.forest;
+  const grid::Lattice2& lattice = forest.lattice();
+  Nodes2 nodes;
+  nodes.index = grid::KeyMap(forest.size());
+  nodes.key.reserve(forest.size());
+
+  const auto add_node = [&](std::int64_t x, std::int64_t y) -> std::int32_t {
+    bool inserted = false;
+    const auto id = nodes.index.insert(grid::key2(x, y), static_cast<std::int32_t>(nodes.key.size()), inserted);
+    if (inserted) {
+      nodes.key.push_back(grid::key2(x, y));
+      nodes.position.push_back({lattice.coordinate(0, x), lattice.coordinate(1, y)});
+      nodes.mask.push_back(0);
+    }
+    return id;
+  };
+
+  // 1. Corners of every leaf, and their phases. A leaf that no boundary meets lies inside
+  //    one phase, so its corners take that phase without asking the oracle per corner.
+  const PhaseMask matrix_bit = PhaseMask{1} << oracle.matrix_phase();
+  for (std::int32_t c = 0; c < static_cast<std::int32_t>(forest.size()); ++c) {
+    if (!forest.is_leaf(c)) continue;
+    const std::int64_t x = forest.fine_x(c), y = forest.fine_y(c), s = forest.fine_size(c);
+    const std::int32_t ids[4] = {add_node(x, y), add_node(x + s, y), add_node(x + s, y + s), add_node(x, y + s)};
+    const auto candidates = g.candidates_of_root(g.root_of(c));
+    if (g.is_cut(c)) {
+      for (std::int32_t id : ids)
+        if (nodes.mask[static_cast<std::size_t>(id)] == 0)
+          nodes.mask[static_cast<std::size_t>(id)] =
+              oracle.closure_phases(nodes.position[static_cast<std::size_t>(id)], candidates);
+    } else {
+      PhaseMask bit = matrix_bit;
+      if (!candidates.empty()) {
+        const Box2 b = forest.box(c);
+        const Vec2 centre{0.5 * (b.min[0] + b.max[0]), 0.5 * (b.min[1] + b.max[1])};
+        bit = PhaseMask{1} << oracle.phase_at(centre, candidates);
+      }
+      for (std::int32_t id : ids)
+        if (nodes.mask[static_cast<std::size_t>(id)] == 0) nodes.mask[static_cast<std::size_t>(id)] = bit;
+    }
+  }
+  const std::size_t n = nodes.key.size();
+  nodes.snapped.assign(n, 0);
+
+  // 2. Snap decisions, from original positions and masks only.
+  const std::int64_t fine_max_x = lattice.coarse_cells[0] * lattice.units(0);
+  const std::int64_t fine_max_y = lattice.coarse_cells[1] * lattice.units(0);
+  std::vector<std::uint8_t> visited(n, 0);
+  struct Snap {
+    std::int32_t node;
+    Vec2 position;
+    PhaseMask mask;
+  };
+  std::vector<Snap> snaps;
+  std::vector<geometry::Crossing> crossings;
+  static constexpr int kDirections[4][2] = {{1, 0}, {-1, 0}, {0, 1}, {0, -1}};  // +x,-x,+y,-y
+  for (std::int32_t c = 0; c < static_cast<std::int32_t>(forest.size()); ++c) {
+    if (!forest.is_leaf(c) || !g.is_cut(c)) continue;
+    const std::int64_t x0 = forest.fine_x(c), y0 = forest.fine_y(c), s = forest.fine_size(c);
+    const std::int64_t corners[4][2] = {{x0, y0}, {x0 + s, y0}, {x0 + s, y0 + s}, {x0, y0 + s}};
+    for (const auto& corner : corners) {
+      const std::int64_t vx = corner[0], vy = corner[1];
+      const std::int32_t v = nodes.id(grid::key2(vx, vy));
+      if (visited[static_cast<std::size_t>(v)]) continue;
+      visited[static_cast<std::size_t>(v)] = 1;
+      const int phase = single_phase(nodes.mask[static_cast<std::size_t>(v)]);
+      if (phase < 0) continue;  // already on an interface
+      const bool on_x_side = vx == 0 || vx == fine_max_x;
+      const bool on_y_side = vy == 0 || vy == fine_max_y;
+      double best = std::numeric_limits<double>::infinity();
+      Snap snap{v, {}, 0};
+      for (const auto& d : kDirections) {
+        // On the domain boundary a node may only slide along it.
+        if ((d[0] != 0 && on_x_side) || (d[1] != 0 && on_y_side)) continue;
+        const std::int64_t wx = vx + d[0] * s, wy = vy + d[1] * s;
+        const std::int32_t w = nodes.id(grid::key2(wx, wy));
+        if (w < 0) continue;  // beyond the ghost layer
+        if (nodes.mask[static_cast<std::size_t>(w)] & (PhaseMask{1} << phase)) continue;  // no phase change
+        // Canonical orientation: from the smaller key.
+        const bool v_first = grid::key2(vx, vy) < grid::key2(wx, wy);
+        const std::int32_t a = v_first ? v : w, b = v_first ? w : v;
+        const Vec2 pa = nodes.position[static_cast<std::size_t>(a)], pb = nodes.position[static_cast<std::size_t>(b)];
+        const std::int64_t mx = (vx + wx) / 2, my = (vy + wy) / 2;
+        const std::int64_t units = lattice.units(0);
+        const std::int32_t root = forest.root(std::min(mx / units, forest.range().hi[0] - 1),
+                                              std::min(my / units, forest.range().hi[1] - 1));
+        if (root < 0) continue;
+        oracle.crossings(pa, pb, g.candidates_of_root(root), crossings);
+        if (crossings.empty()) continue;
+        const geometry::Crossing& cross = v_first ? crossings.front() : crossings.back();
+        const double distance = v_first ? cross.t : 1.0 - cross.t;
+        if (distance < options.alpha && distance < best) {
+          best = distance;
+          snap.position = {pa[0] + cross.t * (pb[0] - pa[0]), pa[1] + cross.t * (pb[1] - pa[1])};
+          snap.mask = (PhaseMask{1} << cross.from_phase) | (PhaseMask{1} << cross.to_phase);
+        }
+      }
+      if (snap.mask != 0) snaps.push_back(snap);
+    }
+  }
+  // 3. Apply all moves at once.
+  for (const Snap& s : snaps) {
+    nodes.position[static_cast<std::size_t>(s.node)] = s.position;
+    nodes.mask[static_cast<std::size_t>(s.node)] = s.mask;
+    nodes.snapped[static_cast<std::size_t>(s.node)] = 1;
+  }
+  nodes.snapped_count = static_cast<std::int64_t>(snaps.size());
+  return nodes;
+}
+
+}  // namespace cisamr::radapt

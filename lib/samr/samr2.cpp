@@ -1,0 +1,172 @@
+#include "samr/samr2.hpp"
+
+#include <algorithm>
+
+#include "core/error.hpp"
+
+namespace cisamr::samr {
+namespace {
+
+constexpr std::int64_t kCandidateBlock = 8;  // roots per side of one AABB-tree query
+
+class Refiner {
+ public:
+  Refiner(const geometry::Oracle2& oracle, RefinedGrid2& g) : oracle_(oracle), g_(g) {}
+
+  void run() {
+    const std::int32_t roots = g_.forest.root_count();
+    for (std::int32_t c = 0; c < roots; ++c)
+      if (g_.is_cut(c)) stack_.push_back(c);
+    while (!stack_.empty()) {
+      const std::int32_t c = stack_.back();
+      stack_.pop_back();
+      if (g_.forest.is_leaf(c)) visit(c);
+    }
+  }
+
+ private:
+  const geometry::Oracle2& oracle_;
+  RefinedGrid2& g_;
+  std::vector<std::int32_t> stack_;
+  std::vector<int> groups_;
+
+  int max_level() const { return g_.forest.lattice().max_level; }
+
+  void visit(std::int32_t c) {
+    const auto cell = g_.forest.cell(c);
+    const int level = cell.level;
+    // R3: edge neighbours at most one level coarser.
+    if (level >= 2) {
+      static constexpr int kEdge[4][2] = {{1, 0}, {-1, 0}, {0, 1}, {0, -1}};
+      for (const auto& e : kEdge) {
+        const std::int32_t n = g_.forest.find(level, cell.i + e[0], cell.j + e[1]);
+        if (n >= 0 && g_.forest.is_leaf(n) && g_.forest.cell(n).level < level - 1) refine(n);
+      }
+    }
+    if (!g_.is_cut(c)) return;
+    // R1 and R2.
+    bool split = false;
+    groups_.clear();
+    for (std::int32_t k : g_.touched(c)) {
+      if (level < oracle_.levels_of(k)) split = true;
+      const int group = oracle_.interface_group(k);
+      if (std::find(groups_.begin(), groups_.end(), group) == groups_.end()) groups_.push_back(group);
+    }
+    if (groups_.size() >= 2 && level < max_level()) split = true;
+    // R4: the 3x3 block around a cut cell has its level; the 5x5 block (less corners)
+    // holds no finer cell, so neighbours of the cut cell carry no hanging node.
+    if (!split) {
+      for (int dj = -2; dj <= 2 && !split; ++dj)
+        for (int di = -2; di <= 2; ++di) {
+          if ((di == 0 && dj == 0) || (std::abs(di) == 2 && std::abs(dj) == 2)) continue;
+          const std::int32_t n = g_.forest.find(level, cell.i + di, cell.j + dj);
+          if (n < 0) continue;
+          if (!g_.forest.is_leaf(n)) {  // a finer cell: refine the cut cell
+            split = true;
+            break;
+          }
+          if (std::abs(di) <= 1 && std::abs(dj) <= 1 && g_.forest.cell(n).level < level) refine(n);
+        }
+    }
+    if (split) refine(c);
+  }
+
+  void refine(std::int32_t c) {
+    if (g_.forest.cell(c).level >= max_level())
+      throw MeshingError("SAMR rules ask for a level beyond the finest one");
+    const std::int32_t first = g_.forest.refine(c);
+    ++g_.refinements;
+    const auto parent_touch = g_.touched(c);
+    std::int32_t parent_touch_begin = g_.touch_begin[static_cast<std::size_t>(c)];
+    const std::uint16_t parent_touch_count = g_.touch_count[static_cast<std::size_t>(c)];
+    (void)parent_touch;
+    for (int k = 0; k < 4; ++k) {
+      const std::int32_t child = first + k;
+      const Box2 box = g_.forest.box(child);
+      g_.touch_begin.push_back(static_cast<std::int32_t>(g_.touch_pool.size()));
+      std::uint16_t count = 0;
+      for (std::uint16_t t = 0; t < parent_touch_count; ++t) {
+        const std::int32_t inc = g_.touch_pool[static_cast<std::size_t>(parent_touch_begin + t)];
+        if (oracle_.boundary_touches(inc, box)) {
+          g_.touch_pool.push_back(inc);
+          ++count;
+        }
+      }
+      g_.touch_count.push_back(count);
+      stack_.push_back(child);
+    }
+    // Cut cells near c may now see a finer neighbour (R4): visit them again.
+    const auto cell = g_.forest.cell(c);
+    for (int dj = -2; dj <= 2; ++dj)
+      for (int di = -2; di <= 2; ++di) {
+        if (di == 0 && dj == 0) continue;
+        const std::int32_t n = g_.forest.find(cell.level, cell.i + di, cell.j + dj);
+        if (n >= 0 && g_.forest.is_leaf(n) && g_.is_cut(n)) stack_.push_back(n);
+      }
+  }
+};
+
+}  // namespace
+
+RefinedGrid2 refine2(const geometry::Oracle2& oracle, const grid::Lattice2& lattice,
+                     const grid::CellRange<2>& range) {
+  RefinedGrid2 g{grid::QuadForest(lattice, range), {}, {}, {}, {}, {}, 0};
+  const std::int32_t roots = g.forest.root_count();
+  const std::int64_t nx = range.count(0), ny = range.count(1);
+
+  // Candidates per root: one AABB-tree query per block of roots, then a box filter.
+  std::vector<std::vector<std::int32_t>> per_root(static_cast<std::size_t>(roots));
+  std::vector<std::int32_t> block_candidates;
+  const double h = lattice.h;
+  for (std::int64_t bj = 0; bj < ny; bj += kCandidateBlock)
+    for (std::int64_t bi = 0; bi < nx; bi += kCandidateBlock) {
+      const std::int64_t ei = std::min(nx, bi + kCandidateBlock), ej = std::min(ny, bj + kCandidateBlock);
+      const Box2 block{{lattice.origin[0] + static_cast<double>(range.lo[0] + bi) * h,
+                        lattice.origin[1] + static_cast<double>(range.lo[1] + bj) * h},
+                       {lattice.origin[0] + static_cast<double>(range.lo[0] + ei) * h,
+                        lattice.origin[1] + static_cast<double>(range.lo[1] + ej) * h}};
+      oracle.candidates(block, block_candidates);
+      for (std::int32_t k : block_candidates) {
+        const Box2 b = oracle.bounding_box(k);
+        // Coarse cells whose closed box meets the inclusion's box.
+        const auto first = [&](double lo, int d) {
+          return static_cast<std::int64_t>(std::floor((lo - lattice.origin[d]) / h)) - 1;
+        };
+        const std::int64_t i0 = std::max(bi, first(b.min[0], 0) - range.lo[0]);
+        const std::int64_t j0 = std::max(bj, first(b.min[1], 1) - range.lo[1]);
+        const std::int64_t i1 = std::min(ei - 1, first(b.max[0], 0) + 2 - range.lo[0]);
+        const std::int64_t j1 = std::min(ej - 1, first(b.max[1], 1) + 2 - range.lo[1]);
+        for (std::int64_t j = j0; j <= j1; ++j)
+          for (std::int64_t i = i0; i <= i1; ++i) {
+            const std::int32_t r = static_cast<std::int32_t>(j * nx + i);
+            if (boxes_overlap(g.forest.box(r), b)) per_root[static_cast<std::size_t>(r)].push_back(k);
+          }
+      }
+    }
+  g.root_candidate_begin.resize(static_cast<std::size_t>(roots) + 1);
+  g.touch_begin.resize(static_cast<std::size_t>(roots));
+  g.touch_count.resize(static_cast<std::size_t>(roots));
+  for (std::int32_t r = 0; r < roots; ++r) {
+    auto& list = per_root[static_cast<std::size_t>(r)];
+    std::sort(list.begin(), list.end());
+    g.root_candidate_begin[static_cast<std::size_t>(r)] = static_cast<std::int32_t>(g.root_candidates.size());
+    g.touch_begin[static_cast<std::size_t>(r)] = static_cast<std::int32_t>(g.touch_pool.size());
+    const Box2 box = g.forest.box(r);
+    std::uint16_t count = 0;
+    for (std::int32_t k : list) {
+      g.root_candidates.push_back(k);
+      if (oracle.boundary_touches(k, box)) {
+        g.touch_pool.push_back(k);
+        ++count;
+      }
+    }
+    g.touch_count[static_cast<std::size_t>(r)] = count;
+    std::vector<std::int32_t>().swap(list);
+  }
+  g.root_candidate_begin[static_cast<std::size_t>(roots)] = static_cast<std::int32_t>(g.root_candidates.size());
+
+  Refiner(oracle, g).run();
+  return g;
+}
+
+}  // namespace cisamr::samr

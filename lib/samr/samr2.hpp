@@ -1,0 +1,53 @@
+#pragma once
+// SAMR in 2D: refine the quad forest near interfaces until the rules hold
+// (lib/samr/README.md):
+//   R1  a cell whose closure meets the boundary of inclusion k, at level < R_k, is refined;
+//   R2  a cell met by the boundaries of two interface groups, at level < Lmax, is refined;
+//   R3  2:1 balance across edges (at most one hanging node per edge);
+//   R4  buffer: every cell sharing a vertex with a cut cell of level l has level l and no
+//       finer edge neighbour (refine the coarser one, or the cut cell).
+// Each rule only ever asks for more refinement, so the result is the least fixed point:
+// unique, whatever the order in which cells are visited (hence partition-invariant when the
+// ghost layer is wide enough).
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "geometry/oracle2.hpp"
+#include "grid/quad_forest.hpp"
+
+namespace cisamr::samr {
+
+struct RefinedGrid2 {
+  grid::QuadForest forest;
+  // Per root: inclusions whose bounding box meets the closed root box (CSR).
+  std::vector<std::int32_t> root_candidate_begin;  // root_count + 1
+  std::vector<std::int32_t> root_candidates;
+  // Per cell: inclusions whose boundary meets the closed cell (CSR-like, append-only pool).
+  std::vector<std::int32_t> touch_begin;
+  std::vector<std::uint16_t> touch_count;
+  std::vector<std::int32_t> touch_pool;
+  std::int64_t refinements = 0;
+
+  std::span<const std::int32_t> candidates_of_root(std::int32_t root) const {
+    const auto b = static_cast<std::size_t>(root_candidate_begin[static_cast<std::size_t>(root)]);
+    const auto e = static_cast<std::size_t>(root_candidate_begin[static_cast<std::size_t>(root) + 1]);
+    return {root_candidates.data() + b, e - b};
+  }
+  std::span<const std::int32_t> touched(std::int32_t c) const {
+    return {touch_pool.data() + touch_begin[static_cast<std::size_t>(c)],
+            touch_count[static_cast<std::size_t>(c)]};
+  }
+  bool is_cut(std::int32_t c) const { return touch_count[static_cast<std::size_t>(c)] > 0; }
+  // Root cell containing cell c.
+  std::int32_t root_of(std::int32_t c) const {
+    const auto& cell = forest.cell(c);
+    return forest.root(cell.i >> cell.level, cell.j >> cell.level);
+  }
+};
+
+// Refines the coarse cells of `range` (the partition box plus its ghost layer).
+RefinedGrid2 refine2(const geometry::Oracle2& oracle, const grid::Lattice2& lattice,
+                     const grid::CellRange<2>& range);
+
+}  // namespace cisamr::samr

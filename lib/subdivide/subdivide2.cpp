@@ -1,0 +1,212 @@
+#include "subdivide/subdivide2.hpp"
+
+#include <algorithm>
+#include <bit>
+#include <limits>
+
+#include "core/error.hpp"
+#include "mesh/metrics.hpp"
+#include "subdivide/templates2.hpp"
+
+namespace cisamr::subdivide {
+namespace {
+
+using Tri = std::array<std::uint8_t, 3>;
+
+struct QuadPoints {
+  Vec2 p[10];
+  PhaseMask m[10];
+  std::int32_t id[10];
+};
+
+// Phase of a triangle: the phase whose closure holds all three vertices; when several
+// do (all three on one interface), the phase at the centroid decides.
+int triangle_phase(const geometry::Oracle2& oracle, std::span<const std::int32_t> candidates,
+                   PhaseMask common, const Vec2& a, const Vec2& b, const Vec2& c) {
+  if (std::popcount(common) == 1) return std::countr_zero(common);
+  const Vec2 centroid{(a[0] + b[0] + c[0]) / 3.0, (a[1] + b[1] + c[1]) / 3.0};
+  const int phase = oracle.phase_at(centroid, candidates);
+  if (common & (PhaseMask{1} << phase)) return phase;
+  return std::countr_zero(common);
+}
+
+// Worst aspect ratio of a split, or +inf if a triangle is inverted or spans no common phase.
+template <std::size_t N>
+double split_quality(const QuadPoints& q, const std::array<Tri, N>& tris) {
+  double worst = 0;
+  for (const Tri& t : tris) {
+    if ((q.m[t[0]] & q.m[t[1]] & q.m[t[2]]) == 0) return std::numeric_limits<double>::infinity();
+    if (!(mesh::signed_area(q.p[t[0]], q.p[t[1]], q.p[t[2]]) > 0)) return std::numeric_limits<double>::infinity();
+    worst = std::max(worst, mesh::aspect_ratio(q.p[t[0]], q.p[t[1]], q.p[t[2]]));
+  }
+  return worst;
+}
+
+class Subdivider {
+ public:
+  Subdivider(const geometry::Oracle2& oracle, const samr::RefinedGrid2& g, const radapt::Nodes2& nodes)
+      : oracle_(oracle), g_(g), forest_(g.forest), nodes_(nodes) {}
+
+  Triangles2 run(const grid::CellRange<2>& owned) {
+    for (std::int32_t c = 0; c < static_cast<std::int32_t>(forest_.size()); ++c) {
+      if (!forest_.is_leaf(c)) continue;
+      const auto& cell = forest_.cell(c);
+      if (!owned.contains({cell.i >> cell.level, cell.j >> cell.level})) continue;
+      leaf(c);
+    }
+    return std::move(out_);
+  }
+
+ private:
+  const geometry::Oracle2& oracle_;
+  const samr::RefinedGrid2& g_;
+  const grid::QuadForest& forest_;
+  const radapt::Nodes2& nodes_;
+  Triangles2 out_;
+  std::vector<geometry::Crossing> crossings_;
+
+  std::int32_t node(std::int64_t x, std::int64_t y) const {
+    const std::int32_t id = nodes_.id(grid::key2(x, y));
+    if (id < 0) throw std::logic_error("subdivide2: missing lattice node");
+    return id;
+  }
+  std::int32_t add_point(const Vec2& p) {
+    out_.extra_points.push_back(p);
+    return static_cast<std::int32_t>(nodes_.key.size() + out_.extra_points.size() - 1);
+  }
+  void emit(std::int32_t a, std::int32_t b, std::int32_t c, int phase) {
+    out_.triangles.insert(out_.triangles.end(), {a, b, c});
+    out_.phase.push_back(phase);
+  }
+
+  void leaf(std::int32_t c) {
+    const auto& cell = forest_.cell(c);
+    const int level = cell.level;
+    const std::int64_t x = forest_.fine_x(c), y = forest_.fine_y(c), s = forest_.fine_size(c);
+    QuadPoints q;
+    const std::int64_t cx[4] = {x, x + s, x + s, x}, cy[4] = {y, y, y + s, y + s};
+    for (int k = 0; k < 4; ++k) {
+      q.id[k] = node(cx[k], cy[k]);
+      q.p[k] = nodes_.position[static_cast<std::size_t>(q.id[k])];
+      q.m[k] = nodes_.mask[static_cast<std::size_t>(q.id[k])];
+    }
+    // Hanging nodes: an edge neighbour refined beyond this leaf's level.
+    static constexpr int kEdgeDir[4][2] = {{0, -1}, {1, 0}, {0, 1}, {-1, 0}};
+    int hanging = 0;
+    for (int e = 0; e < 4; ++e) {
+      const std::int32_t n = forest_.find(level, cell.i + kEdgeDir[e][0], cell.j + kEdgeDir[e][1]);
+      if (n >= 0 && !forest_.is_leaf(n)) hanging |= 1 << e;
+    }
+    const auto candidates = g_.candidates_of_root(g_.root_of(c));
+    if (hanging) {
+      closure(q, hanging, cx, cy, s);
+      return;
+    }
+    const bool moved = nodes_.snapped[static_cast<std::size_t>(q.id[0])] | nodes_.snapped[static_cast<std::size_t>(q.id[1])] |
+                       nodes_.snapped[static_cast<std::size_t>(q.id[2])] | nodes_.snapped[static_cast<std::size_t>(q.id[3])];
+    const PhaseMask common = q.m[0] & q.m[1] & q.m[2] & q.m[3];
+    if (!moved && std::popcount(common) == 1) {  // the common case: an untouched square
+      const int phase = std::countr_zero(common);
+      emit(q.id[0], q.id[1], q.id[2], phase);
+      emit(q.id[0], q.id[2], q.id[3], phase);
+      return;
+    }
+    split_quad(q, candidates);
+  }
+
+  void closure(QuadPoints& q, int hanging, const std::int64_t* cx, const std::int64_t* cy, std::int64_t s) {
+    ++out_.hanging_cells;
+    const PhaseMask common = q.m[0] & q.m[1] & q.m[2] & q.m[3];
+    for (int k = 0; k < 4; ++k)
+      if (nodes_.snapped[static_cast<std::size_t>(q.id[k])])
+        throw std::logic_error("subdivide2: a cell with hanging nodes has a moved corner (rule R4 broken)");
+    if (std::popcount(common) != 1)
+      throw std::logic_error("subdivide2: a cell with hanging nodes is cut (rule R4 broken)");
+    const int phase = std::countr_zero(common);
+    for (int e = 0; e < 4; ++e)
+      if ((hanging >> e) & 1) {
+        const int a = e, b = (e + 1) % 4;
+        q.id[templates2::mid(e)] = node((cx[a] + cx[b]) / 2, (cy[a] + cy[b]) / 2);
+      }
+    const auto& t = templates2::kHangingClosure[static_cast<std::size_t>(hanging)];
+    bool needs_centre = false;
+    for (int k = 0; k < t.count; ++k)
+      for (int v : t.tri[static_cast<std::size_t>(k)]) needs_centre |= v == templates2::kCentre;
+    if (needs_centre) {
+      const grid::Lattice2& l = forest_.lattice();
+      q.id[templates2::kCentre] = add_point({l.coordinate(0, cx[0] + s / 2), l.coordinate(1, cy[0] + s / 2)});
+    }
+    for (int k = 0; k < t.count; ++k) {
+      const auto& tri = t.tri[static_cast<std::size_t>(k)];
+      emit(q.id[tri[0]], q.id[tri[1]], q.id[tri[2]], phase);
+    }
+  }
+
+  void split_quad(QuadPoints& q, std::span<const std::int32_t> candidates) {
+    const bool cut = (q.m[0] & q.m[1] & q.m[2] & q.m[3]) == 0;
+    if (cut) ++out_.cut_quads;
+    double best = split_quality(q, templates2::kDiagonal02);
+    int choice = 0;  // 0: diagonal 0-2, 1: diagonal 1-3, 2: double diagonal
+    const double d13 = split_quality(q, templates2::kDiagonal13);
+    if (d13 < best) best = d13, choice = 1;
+    // Double diagonal: a point of the interface on the diagonal the interface crosses.
+    Vec2 best_point{};
+    PhaseMask best_point_mask = 0;
+    if (cut) {
+      for (int diag = 0; diag < 2; ++diag) {
+        const int a = diag == 0 ? 1 : 0, b = diag == 0 ? 3 : 2;  // the crossed diagonal
+        if (q.m[a] & q.m[b]) continue;
+        const bool a_first = nodes_.key[static_cast<std::size_t>(q.id[a])] < nodes_.key[static_cast<std::size_t>(q.id[b])];
+        const Vec2 pa = q.p[a_first ? a : b], pb = q.p[a_first ? b : a];
+        oracle_.crossings(pa, pb, candidates, crossings_);
+        for (const auto& cr : crossings_) {
+          q.p[templates2::kDiagonalPoint] = {pa[0] + cr.t * (pb[0] - pa[0]), pa[1] + cr.t * (pb[1] - pa[1])};
+          q.m[templates2::kDiagonalPoint] = (PhaseMask{1} << cr.from_phase) | (PhaseMask{1} << cr.to_phase);
+          const double quality = split_quality(q, templates2::kDoubleDiagonal);
+          if (quality < best) {
+            best = quality, choice = 2;
+            best_point = q.p[templates2::kDiagonalPoint];
+            best_point_mask = q.m[templates2::kDiagonalPoint];
+          }
+        }
+      }
+    }
+    if (!(best < std::numeric_limits<double>::infinity())) {
+      // No phase-consistent split: a configuration below the finest level's resolution.
+      ++out_.unresolved;
+      best = 0;
+      choice = 0;
+      emit_split(q, templates2::kDiagonal02, candidates, true);
+      return;
+    }
+    if (choice == 0) emit_split(q, templates2::kDiagonal02, candidates, false);
+    else if (choice == 1) emit_split(q, templates2::kDiagonal13, candidates, false);
+    else {
+      ++out_.double_diagonal;
+      q.p[templates2::kDiagonalPoint] = best_point;
+      q.m[templates2::kDiagonalPoint] = best_point_mask;
+      q.id[templates2::kDiagonalPoint] = add_point(best_point);
+      emit_split(q, templates2::kDoubleDiagonal, candidates, false);
+    }
+  }
+
+  template <std::size_t N>
+  void emit_split(const QuadPoints& q, const std::array<Tri, N>& tris, std::span<const std::int32_t> candidates,
+                  bool unresolved) {
+    for (const Tri& t : tris) {
+      PhaseMask common = q.m[t[0]] & q.m[t[1]] & q.m[t[2]];
+      if (common == 0 && unresolved) common = ~PhaseMask{0};
+      emit(q.id[t[0]], q.id[t[1]], q.id[t[2]],
+           triangle_phase(oracle_, candidates, common, q.p[t[0]], q.p[t[1]], q.p[t[2]]));
+    }
+  }
+};
+
+}  // namespace
+
+Triangles2 subdivide2(const geometry::Oracle2& oracle, const samr::RefinedGrid2& grid,
+                      const radapt::Nodes2& nodes, const grid::CellRange<2>& owned) {
+  return Subdivider(oracle, grid, nodes).run(owned);
+}
+
+}  // namespace cisamr::subdivide

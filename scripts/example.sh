@@ -1,0 +1,12 @@
+#!/usr/bin/env bash
+# The README's first command: install, build, then mesh the shipped 2D example and
+# certify the result. Writes out/composite.{vtu,svg}, out/composite-report.json and
+# out/composite-certificate.html.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bash scripts/build.sh
+mkdir -p out
+./build/bin/cisamr mesh data/examples/composite.json -o out/composite.vtu \
+  --report out/composite-report.json --svg out/composite.svg --verbose
+./build/bin/cisamr certify out/composite.vtu --scene data/examples/composite.json \
+  --html out/composite-certificate.html --json out/composite-certificate.json
