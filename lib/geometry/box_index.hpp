@@ -28,4 +28,23 @@ class BoxIndex2 {
 std::vector<std::pair<std::int32_t, std::int32_t>> overlapping_box_pairs(
     const std::vector<Box2>& boxes);
 
+// CGAL AABB tree over 3D boxes.
+class BoxIndex3 {
+ public:
+  explicit BoxIndex3(const std::vector<Box3>& boxes);
+  ~BoxIndex3();
+  BoxIndex3(BoxIndex3&&) noexcept;
+  BoxIndex3& operator=(BoxIndex3&&) noexcept;
+  // Indices of the boxes that meet the closed query box, ascending.
+  void query(const Box3& box, std::vector<std::int32_t>& out) const;
+
+ private:
+  struct Tree;
+  std::unique_ptr<Tree> tree_;
+};
+
+// Every pair (i < j) of 3D boxes that meet (closed), sorted; CGAL Box_intersection_d.
+std::vector<std::pair<std::int32_t, std::int32_t>> overlapping_box_pairs(
+    const std::vector<Box3>& boxes);
+
 }  // namespace cisamr::geometry

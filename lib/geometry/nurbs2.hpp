@@ -47,6 +47,10 @@ double area(const Region& r);
 double length(const Region& r);
 Vec2 point(const Piece& piece, int degree, double s);  // s in [0,1]
 
+// x coordinates where the curve has a vertical tangent (x'(s) = 0) or a piece joint:
+// the breakpoints of line integrals across the region.
+void x_breakpoints(const Region& r, std::vector<double>& xs);
+
 // Polyline through the curve with chord error ≤ tol (closed, first point not repeated).
 std::vector<Vec2> flatten(const Region& r, double tol);
 

@@ -227,6 +227,16 @@ struct Oracle2::Impl {
 
   void validate_and_build(const SceneDesc& s);
   void check_overlaps();
+
+  // Distance machinery (README: distances). The boundary of k as pieces s ∈ [0,1].
+  int piece_count(std::int32_t k) const;
+  Vec2 curve_point(std::int32_t k, int piece, double s) const;
+  // Points of ∂k where |q − p| has a local minimum along the curve (plus polygon vertices).
+  void nearest_boundary_points(std::int32_t k, const Vec2& p, std::vector<Vec2>& out) const;
+  // Points where ∂k and ∂j meet (the C0 corners of their union).
+  void boundary_meetings(std::int32_t k, std::int32_t j, std::vector<Vec2>& out) const;
+  double matrix_distance(const Vec2& p) const;
+  PhaseMask closure_mask(const Vec2& p, std::span<const std::int32_t> cands) const;
   bool regions_intersect(std::int32_t i, std::int32_t j, bool interiors) const;
 };
 
@@ -388,7 +398,8 @@ void Oracle2::Impl::validate_and_build(const SceneDesc& s) {
       bool all_collinear = true;
       for (std::size_t q = 2; q < v.size() && all_collinear; ++q)
         all_collinear = exact::orientation(v[0], v[1], v[q]) == 0;
-      if (all_collinear || area2 == 0) throw InputError(src, field + ".vertices", "polygon has zero area");
+      (void)area2;
+      if (all_collinear) throw InputError(src, field + ".vertices", "polygon has zero area");
       // Self-intersection: non-adjacent edges must not meet; adjacent ones only at their
       // shared vertex. Box pairs first (Box_intersection_d), exact tests after.
       const std::size_t n = v.size();
@@ -456,18 +467,16 @@ void Oracle2::Impl::validate_and_build(const SceneDesc& s) {
 // (interiors == true)? Boundary against boundary with the segment machinery: sample
 // i's boundary chain and test it against j, plus containment of one in the other.
 bool Oracle2::Impl::regions_intersect(std::int32_t i, std::int32_t j, bool interiors) const {
-  // Analytic fast path for two circles (exact).
+  // Interiors must overlap by more than rounding-level depth to count: decimal input
+  // cannot express an exact tangency (README: overlap tolerance).
   const Item& a = items[i];
   const Item& b = items[j];
+  const double depth_tol = 1e-10 * std::min(box_size(a.box), box_size(b.box));
   if (a.kind == Kind::circle && b.kind == Kind::circle) {
     const CircleData& p = circles[a.data];
     const CircleData& q = circles[b.data];
-    // (r1 + r2)² vs |c1 − c2|², exactly as a circle test of radius r1 + r2 would round;
-    // use the exact side of c2 against the circle of radius r1+r2 when representable.
-    const double rs = p.r + q.r;
-    const int s = (rs - p.r == q.r && rs - q.r == p.r) ? exact::circle_side(q.c, p.c, rs)
-                                                       : (std::hypot(q.c[0] - p.c[0], q.c[1] - p.c[1]) < rs ? 1 : -1);
-    return interiors ? s > 0 : s >= 0;
+    if (!interiors) return exact::disks_side(p.c, p.r, q.c, q.r) >= 0;
+    return std::hypot(q.c[0] - p.c[0], q.c[1] - p.c[1]) < p.r + q.r - depth_tol;
   }
   // General: walk a fine polyline of each boundary through the other's classifier.
   auto boundary_poly = [&](const Item& it) {
@@ -502,7 +511,7 @@ bool Oracle2::Impl::regions_intersect(std::int32_t i, std::int32_t j, bool inter
     const std::vector<Vec2> pts = boundary_poly(items[self]);
     for (const Vec2& q : pts) {
       const int s = side(other, q);
-      if (interiors ? s > 0 : s >= 0) return true;
+      if (interiors ? (s > 0 && boundary_distance(other, q) > depth_tol) : s >= 0) return true;
     }
   }
   if (interiors) {
@@ -511,7 +520,8 @@ bool Oracle2::Impl::regions_intersect(std::int32_t i, std::int32_t j, bool inter
     for (std::size_t q = 0; q < pts.size(); ++q) {
       const Vec2& u = pts[q];
       const Vec2& v = pts[(q + 1) % pts.size()];
-      if (side(j, Vec2{0.5 * (u[0] + v[0]), 0.5 * (u[1] + v[1])}) > 0) return true;
+      const Vec2 mid{0.5 * (u[0] + v[0]), 0.5 * (u[1] + v[1])};
+      if (side(j, mid) > 0 && boundary_distance(j, mid) > depth_tol) return true;
     }
   }
   return false;
@@ -623,7 +633,11 @@ bool Oracle2::boundary_touches(std::int32_t k, const Box2& box_in) const {
 }
 
 PhaseMask Oracle2::closure_phases(const Vec2& p, std::span<const std::int32_t> cands) const {
-  const Impl& m = *impl_;
+  return impl_->closure_mask(p, cands);
+}
+
+PhaseMask Oracle2::Impl::closure_mask(const Vec2& p, std::span<const std::int32_t> cands) const {
+  const Impl& m = *this;
   PhaseMask inside = 0, on = 0;
   int on_count = 0;
   for (std::int32_t k : cands) {
@@ -639,20 +653,41 @@ PhaseMask Oracle2::closure_phases(const Vec2& p, std::span<const std::int32_t> c
   if (!on) return matrix_bit;
   if (on_count == 1) return on | matrix_bit;
   // On several boundaries and inside none (touching inclusions, shared polygon edges):
-  // the matrix reaches p iff some nearby direction leaves every inclusion.
+  // the matrix reaches p iff some nearby direction leaves every inclusion. Probe the
+  // tangent directions of the curves at p (where tangent shapes leave a cusp of matrix)
+  // and a fan of directions.
   double scale = std::numeric_limits<double>::infinity();
   for (std::int32_t k : cands) scale = std::min(scale, box_size(m.items[k].box));
+  auto outside_all = [&](const Vec2& q) {
+    for (std::int32_t k : cands)
+      if (m.side(k, q) >= 0) return false;
+    return true;
+  };
+  for (std::int32_t k : cands) {
+    Vec2 tan{0, 0};
+    const Item& it = m.items[k];
+    if (it.kind == Kind::circle) {
+      const Vec2& c = m.circles[it.data].c;
+      tan = {-(p[1] - c[1]), p[0] - c[0]};
+    } else if (it.kind == Kind::ellipse) {
+      const EllipseData& e = m.ellipses[it.data];
+      const Vec2 u = to_unit_frame(e, p);
+      const double gx = u[0] / e.a, gy = u[1] / e.b;  // gradient in the body frame
+      tan = {e.cs * (-gy) - e.sn * gx, e.sn * (-gy) + e.cs * gx};
+    } else {
+      continue;
+    }
+    const double n = std::hypot(tan[0], tan[1]);
+    if (!(n > 0)) continue;
+    const double rho = 1e-6 * scale / n;
+    if (outside_all({p[0] + rho * tan[0], p[1] + rho * tan[1]}) ||
+        outside_all({p[0] - rho * tan[0], p[1] - rho * tan[1]}))
+      return on | matrix_bit;
+  }
   const double rho = 1e-9 * scale;
   for (int dir = 0; dir < 32; ++dir) {
     const double ang = (dir + 0.5) * (2 * M_PI / 32);
-    const Vec2 q{p[0] + rho * std::cos(ang), p[1] + rho * std::sin(ang)};
-    bool outside_all = true;
-    for (std::int32_t k : cands)
-      if (m.side(k, q) >= 0) {
-        outside_all = false;
-        break;
-      }
-    if (outside_all) return on | matrix_bit;
+    if (outside_all({p[0] + rho * std::cos(ang), p[1] + rho * std::sin(ang)})) return on | matrix_bit;
   }
   return on;
 }
@@ -719,5 +754,395 @@ void Oracle2::crossings(const Vec2& a, const Vec2& b, std::span<const std::int32
   out.resize(w);
 }
 
+
+// ---------------------------------------------------------------- areas
+std::vector<double> Oracle2::phase_areas() const {
+  const Impl& m = *impl_;
+  const SceneDesc& sc = m.scene;
+  const Box2 dom{{sc.domain_min[0], sc.domain_min[1]}, {sc.domain_max[0], sc.domain_max[1]}};
+  std::vector<double> areas(sc.phases.size(), 0.0);
+  std::vector<int> group_size(m.items.size(), 0);
+  for (const Item& it : m.items) ++group_size[it.group];
+  // Inclusions alone in their group and fully inside the domain: analytic measure.
+  std::vector<std::int32_t> integrated;
+  std::vector<double> breaks{dom.min[0], dom.max[0]};
+  for (std::size_t k = 0; k < m.items.size(); ++k) {
+    const Item& it = m.items[k];
+    const bool inside_domain = it.box.min[0] >= dom.min[0] && it.box.max[0] <= dom.max[0] &&
+                               it.box.min[1] >= dom.min[1] && it.box.max[1] <= dom.max[1];
+    if (inside_domain && group_size[it.group] == 1) {
+      double a = 0;
+      switch (it.kind) {
+        case Kind::circle: a = M_PI * m.circles[it.data].r * m.circles[it.data].r; break;
+        case Kind::ellipse: a = M_PI * m.ellipses[it.data].a * m.ellipses[it.data].b; break;
+        case Kind::polygon: {
+          auto poly = m.polygon(it);
+          double s2 = 0;
+          for (std::size_t i = 0, j = poly.size() - 1; i < poly.size(); j = i++)
+            s2 += poly[j][0] * poly[i][1] - poly[i][0] * poly[j][1];
+          a = 0.5 * std::abs(s2);
+          break;
+        }
+        case Kind::nurbs: a = nurbs::area(m.curves[it.data]); break;
+      }
+      areas[it.phase] += a;
+      continue;
+    }
+    if (!boxes_overlap(it.box, dom)) continue;
+    integrated.push_back(static_cast<std::int32_t>(k));
+    breaks.push_back(std::clamp(it.box.min[0], dom.min[0], dom.max[0]));
+    breaks.push_back(std::clamp(it.box.max[0], dom.min[0], dom.max[0]));
+    if (it.kind == Kind::polygon)
+      for (const Vec2& v : m.polygon(it)) breaks.push_back(std::clamp(v[0], dom.min[0], dom.max[0]));
+    if (it.kind == Kind::nurbs) {
+      std::vector<double> xs;
+      nurbs::x_breakpoints(m.curves[it.data], xs);
+      for (double x : xs) breaks.push_back(std::clamp(x, dom.min[0], dom.max[0]));
+    }
+  }
+  if (!integrated.empty()) {
+    std::sort(breaks.begin(), breaks.end());
+    breaks.erase(std::unique(breaks.begin(), breaks.end()), breaks.end());
+    const std::size_t np = areas.size();
+    std::vector<std::int32_t> cands;
+    std::vector<Crossing> cr;
+    // Length of each inclusion phase on the vertical line at x (matrix left out).
+    auto line = [&](double x, std::vector<double>& len) {
+      len.assign(np, 0.0);
+      cands.clear();
+      for (std::int32_t k : integrated)
+        if (m.items[k].box.min[0] <= x && x <= m.items[k].box.max[0]) cands.push_back(k);
+      if (cands.empty()) return;
+      const Vec2 a{x, dom.min[1]}, b{x, dom.max[1]};
+      crossings(a, b, cands, cr);
+      const double span = dom.max[1] - dom.min[1];
+      double t0 = 0;
+      int ph = cr.empty() ? phase_at(Vec2{x, 0.5 * (a[1] + b[1])}, cands) : cr[0].from_phase;
+      for (const Crossing& c : cr) {
+        len[ph] += (c.t - t0) * span;
+        t0 = c.t;
+        ph = c.to_phase;
+      }
+      len[ph] += (1 - t0) * span;
+    };
+    // Gauss–Legendre (10 points) after x = x0 + (x1−x0)(1−cos πs)/2, which smooths the
+    // square-root behaviour of chord lengths at vertical tangents; adaptive halving.
+    static const double gx[5] = {0.1488743389816312, 0.4333953941292472, 0.6794095682990244,
+                                 0.8650633666889845, 0.9739065285171717};
+    static const double gw[5] = {0.2955242247147529, 0.2692667193099963, 0.2190863625159820,
+                                 0.1494513491505806, 0.0666713443086881};
+    std::vector<double> len;
+    auto panel = [&](double x0, double x1, double s0, double s1, std::vector<double>& sum) {
+      sum.assign(np, 0.0);
+      const double hm = 0.5 * (s1 - s0), cm = 0.5 * (s1 + s0);
+      for (int i = 0; i < 10; ++i) {
+        const double s = cm + hm * (i < 5 ? -gx[i] : gx[i - 5]);
+        const double w = gw[i < 5 ? i : i - 5] * hm;
+        const double x = x0 + (x1 - x0) * 0.5 * (1 - std::cos(M_PI * s));
+        const double jac = (x1 - x0) * 0.5 * M_PI * std::sin(M_PI * s);
+        line(x, len);
+        for (std::size_t p = 0; p < np; ++p) sum[p] += w * jac * len[p];
+      }
+    };
+    const double tol = 1e-13 * (dom.max[0] - dom.min[0]) * (dom.max[1] - dom.min[1]);
+    struct Task {
+      double s0, s1;
+      int depth;
+    };
+    std::vector<double> whole, left, right;
+    for (std::size_t bi = 0; bi + 1 < breaks.size(); ++bi) {
+      const double x0 = breaks[bi], x1 = breaks[bi + 1];
+      if (!(x1 > x0)) continue;
+      std::vector<Task> stack{{0, 1, 0}};
+      std::vector<std::vector<double>> est{{}};
+      panel(x0, x1, 0, 1, est[0]);
+      while (!stack.empty()) {
+        const Task tk = stack.back();
+        whole = est.back();
+        stack.pop_back();
+        est.pop_back();
+        const double sm = 0.5 * (tk.s0 + tk.s1);
+        panel(x0, x1, tk.s0, sm, left);
+        panel(x0, x1, sm, tk.s1, right);
+        double diff = 0;
+        for (std::size_t p = 0; p < np; ++p) diff += std::abs(left[p] + right[p] - whole[p]);
+        if (diff <= tol * (tk.s1 - tk.s0) || tk.depth >= 40) {
+          for (std::size_t p = 0; p < np; ++p) areas[p] += left[p] + right[p];
+        } else {
+          stack.push_back({tk.s0, sm, tk.depth + 1});
+          est.push_back(left);
+          stack.push_back({sm, tk.s1, tk.depth + 1});
+          est.push_back(right);
+        }
+      }
+    }
+  }
+  double total = 0;
+  for (std::size_t p = 0; p < areas.size(); ++p)
+    if (static_cast<int>(p) != m.matrix) total += areas[p];
+  areas[m.matrix] = (dom.max[0] - dom.min[0]) * (dom.max[1] - dom.min[1]) - total;
+  return areas;
+}
+
+// ---------------------------------------------------------------- distances
+double Oracle2::distance_to_phase(const Vec2& p, int phase_index) const {
+  const Impl& m = *impl_;
+  auto box_distance = [&](const Box2& b) {
+    const double dx = std::max({b.min[0] - p[0], 0.0, p[0] - b.max[0]});
+    const double dy = std::max({b.min[1] - p[1], 0.0, p[1] - b.max[1]});
+    return std::hypot(dx, dy);
+  };
+  const std::int32_t n = static_cast<std::int32_t>(m.items.size());
+  if (phase_index != m.matrix) {
+    // Distance to a union is the minimum over its members.
+    double best = std::numeric_limits<double>::infinity();
+    for (std::int32_t k = 0; k < n; ++k) {
+      if (m.items[k].phase != phase_index || box_distance(m.items[k].box) >= best) continue;
+      if (m.side(k, p) >= 0) return 0;
+      best = std::min(best, m.boundary_distance(k, p));
+    }
+    return best;
+  }
+  // Matrix: 0 unless p is interior to some inclusion; then the distance to the
+  // complement of the union, i.e. to the nearest boundary point not inside another one.
+  std::vector<std::int32_t> inside;
+  for (std::int32_t k = 0; k < n; ++k)
+    if (point_in_box(p, m.items[k].box) && m.side(k, p) > 0) inside.push_back(k);
+  if (inside.empty()) return m.matrix_distance(p);
+  double best = std::numeric_limits<double>::infinity();
+  if (inside.size() == 1) {
+    best = m.boundary_distance(inside[0], p);
+    bool alone = true;
+    for (std::int32_t k = 0; k < n && alone; ++k)
+      if (k != inside[0] && box_distance(m.items[k].box) <= best * (1 + 1e-9)) alone = false;
+    if (alone) return best;
+  }
+  return m.matrix_distance(p);
+}
+
+int Oracle2::Impl::piece_count(std::int32_t k) const {
+  const Item& it = items[k];
+  if (it.kind == Kind::polygon) return static_cast<int>(polygons[it.data].count);
+  if (it.kind == Kind::nurbs) return static_cast<int>(curves[it.data].pieces.size());
+  return 1;
+}
+
+Vec2 Oracle2::Impl::curve_point(std::int32_t k, int piece, double s) const {
+  const Item& it = items[k];
+  switch (it.kind) {
+    case Kind::circle: {
+      const CircleData& c = circles[it.data];
+      const double th = 2 * M_PI * s;
+      return {c.c[0] + c.r * std::cos(th), c.c[1] + c.r * std::sin(th)};
+    }
+    case Kind::ellipse: {
+      const EllipseData& e = ellipses[it.data];
+      const double th = 2 * M_PI * s, x = e.a * std::cos(th), y = e.b * std::sin(th);
+      return {e.c[0] + x * e.cs - y * e.sn, e.c[1] + x * e.sn + y * e.cs};
+    }
+    case Kind::polygon: {
+      auto poly = polygon(it);
+      const Vec2& u = poly[piece];
+      const Vec2& v = poly[(piece + 1) % poly.size()];
+      return {u[0] + s * (v[0] - u[0]), u[1] + s * (v[1] - u[1])};
+    }
+    case Kind::nurbs: {
+      const nurbs::Region& r = curves[it.data];
+      return nurbs::point(r.pieces[piece], r.degree, s);
+    }
+  }
+  return {0, 0};
+}
+
+void Oracle2::Impl::nearest_boundary_points(std::int32_t k, const Vec2& p,
+                                            std::vector<Vec2>& out) const {
+  const Item& it = items[k];
+  if (it.kind == Kind::circle) {
+    // The distance along a circle is unimodal: one minimum.
+    const CircleData& c = circles[it.data];
+    const double dx = p[0] - c.c[0], dy = p[1] - c.c[1], n = std::hypot(dx, dy);
+    if (n == 0) out.push_back({c.c[0] + c.r, c.c[1]});
+    else out.push_back({c.c[0] + c.r * (dx / n), c.c[1] + c.r * (dy / n)});
+    return;
+  }
+  if (it.kind == Kind::polygon) {
+    // Per edge: the projection (convex along the edge) and the vertices (arc ends).
+    auto poly = polygon(it);
+    for (std::size_t i = 0, j = poly.size() - 1; i < poly.size(); j = i++) {
+      const Vec2& u = poly[j];
+      const Vec2& v = poly[i];
+      out.push_back(v);
+      const double ex = v[0] - u[0], ey = v[1] - u[1];
+      const double t = ((p[0] - u[0]) * ex + (p[1] - u[1]) * ey) / (ex * ex + ey * ey);
+      if (t > 0 && t < 1) out.push_back({u[0] + t * ex, u[1] + t * ey});
+    }
+    return;
+  }
+  // Ellipse / NURBS: every discrete local minimum of a dense sampling, refined by golden
+  // section inside its bracket (piece ends included as candidates).
+  const int samples = it.kind == Kind::ellipse ? 512 : 32;
+  std::vector<double> d2(samples + 1);
+  auto dist2 = [&](int piece, double s) {
+    const Vec2 q = curve_point(k, piece, s);
+    return (q[0] - p[0]) * (q[0] - p[0]) + (q[1] - p[1]) * (q[1] - p[1]);
+  };
+  for (int piece = 0; piece < piece_count(k); ++piece) {
+    for (int i = 0; i <= samples; ++i) d2[i] = dist2(piece, double(i) / samples);
+    for (int i = 0; i <= samples; ++i) {
+      if ((i > 0 && d2[i] > d2[i - 1]) || (i < samples && d2[i] > d2[i + 1])) continue;
+      double lo = double(std::max(i - 1, 0)) / samples, hi = double(std::min(i + 1, samples)) / samples;
+      constexpr double g = 0.6180339887498949;
+      double x1 = hi - g * (hi - lo), x2 = lo + g * (hi - lo);
+      double f1 = dist2(piece, x1), f2 = dist2(piece, x2);
+      for (int iter = 0; iter < 80 && hi - lo > 1e-17; ++iter) {
+        if (f1 <= f2) {
+          hi = x2, x2 = x1, f2 = f1, x1 = hi - g * (hi - lo), f1 = dist2(piece, x1);
+        } else {
+          lo = x1, x1 = x2, f1 = f2, x2 = lo + g * (hi - lo), f2 = dist2(piece, x2);
+        }
+      }
+      out.push_back(curve_point(k, piece, f1 <= f2 ? x1 : x2));
+      out.push_back(curve_point(k, piece, double(i) / samples));
+    }
+  }
+}
+
+void Oracle2::Impl::boundary_meetings(std::int32_t k, std::int32_t j, std::vector<Vec2>& out) const {
+  const Item* a = &items[k];
+  const Item* b = &items[j];
+  if (a->kind == Kind::polygon && b->kind == Kind::circle) std::swap(a, b), std::swap(k, j);
+  if (a->kind == Kind::circle && b->kind == Kind::circle) {
+    const CircleData& p = circles[a->data];
+    const CircleData& q = circles[b->data];
+    const double dx = q.c[0] - p.c[0], dy = q.c[1] - p.c[1], d = std::hypot(dx, dy);
+    if (d == 0 || d > p.r + q.r || d < std::abs(p.r - q.r)) return;
+    const double along = (p.r * p.r - q.r * q.r + d * d) / (2 * d);
+    const double h = std::sqrt(std::max(0.0, p.r * p.r - along * along));
+    const double ex = dx / d, ey = dy / d;
+    out.push_back({p.c[0] + along * ex - h * ey, p.c[1] + along * ey + h * ex});
+    out.push_back({p.c[0] + along * ex + h * ey, p.c[1] + along * ey - h * ex});
+    return;
+  }
+  if (a->kind == Kind::circle && b->kind == Kind::polygon) {
+    const CircleData& c = circles[a->data];
+    auto poly = polygon(*b);
+    for (std::size_t i = 0, i0 = poly.size() - 1; i < poly.size(); i0 = i++) {
+      const Vec2& u = poly[i0];
+      const Vec2& v = poly[i];
+      // |u + t(v−u) − c|² = r²: A t² + 2B t + C = 0.
+      const double ex = v[0] - u[0], ey = v[1] - u[1], fx = u[0] - c.c[0], fy = u[1] - c.c[1];
+      const double A = ex * ex + ey * ey, B = fx * ex + fy * ey, C = fx * fx + fy * fy - c.r * c.r;
+      const double disc = B * B - A * C;
+      if (disc < 0) continue;
+      const double sq = std::sqrt(disc);
+      for (double t : {(-B - sq) / A, (-B + sq) / A})
+        if (t >= 0 && t <= 1) out.push_back({u[0] + t * ex, u[1] + t * ey});
+    }
+    return;
+  }
+  if (a->kind == Kind::polygon && b->kind == Kind::polygon) {
+    auto pa = polygon(*a), pb = polygon(*b);
+    for (std::size_t i = 0, i0 = pa.size() - 1; i < pa.size(); i0 = i++)
+      for (std::size_t l = 0, l0 = pb.size() - 1; l < pb.size(); l0 = l++) {
+        const Vec2 &u = pa[i0], &v = pa[i], &w = pb[l0], &z = pb[l];
+        if (!exact::segments_intersect(u, v, w, z)) continue;
+        const double ex = v[0] - u[0], ey = v[1] - u[1], gx = z[0] - w[0], gy = z[1] - w[1];
+        const double den = ex * gy - ey * gx;
+        if (exact::orientation(u, v, w) == 0 && exact::orientation(u, v, z) == 0) continue;  // collinear: ends are vertices
+        const double t = std::clamp(((w[0] - u[0]) * gy - (w[1] - u[1]) * gx) / den, 0.0, 1.0);
+        out.push_back({u[0] + t * ex, u[1] + t * ey});
+      }
+    return;
+  }
+  // Ellipses and NURBS: walk ∂k, bisect every sign change of j's classifier.
+  const int samples = a->kind == Kind::ellipse ? 1024 : 64;
+  for (int piece = 0; piece < piece_count(k); ++piece) {
+    Vec2 prev = curve_point(k, piece, 0);
+    int prev_side = side(j, prev);
+    if (prev_side == 0) out.push_back(prev);
+    for (int i = 1; i <= samples; ++i) {
+      double s1 = double(i) / samples;
+      const Vec2 cur = curve_point(k, piece, s1);
+      const int cur_side = side(j, cur);
+      if (cur_side == 0) out.push_back(cur);
+      else if (prev_side != 0 && cur_side != prev_side) {
+        double s0 = double(i - 1) / samples;
+        Vec2 mid = cur;
+        for (int iter = 0; iter < 64; ++iter) {
+          const double sm = 0.5 * (s0 + s1);
+          if (sm <= s0 || sm >= s1) break;
+          mid = curve_point(k, piece, sm);
+          const int ms = side(j, mid);
+          if (ms == 0) break;
+          if (ms == prev_side) s0 = sm;
+          else s1 = sm;
+        }
+        out.push_back(mid);
+      }
+      prev = cur;
+      prev_side = cur_side;
+    }
+  }
+}
+
+// Distance from p to the matrix: 0 unless p is interior to an inclusion; then the
+// distance to ∂U (U = union of the inclusions), minimal over the candidates of README
+// (local minima of each boundary, pairwise corners, vertices) that no other inclusion
+// covers. Exact for circles and polygons (the restricted distance along an arc is
+// minimal at an unconstrained minimum or at an arc end).
+double Oracle2::Impl::matrix_distance(const Vec2& p) const {
+  std::vector<std::int32_t> near;
+  index->query(Box2{p, p}, near);
+  double lower = 0;
+  bool inside_any = false, on_any = false;
+  for (std::int32_t k : near) {
+    const int s = side(k, p);
+    if (s > 0) {
+      inside_any = true;
+      lower = std::max(lower, boundary_distance(k, p));
+    }
+    on_any |= s == 0;
+  }
+  const PhaseMask matrix_bit = PhaseMask(1) << matrix;
+  // ON boundaries only: 0 unless the matrix does not reach p (a shared polygon edge).
+  if (!inside_any && (!on_any || (closure_mask(p, near) & matrix_bit))) return 0;
+  std::vector<Vec2> pts;
+  double reach = std::max(lower, 1e-300);
+  for (;;) {
+    // Slightly inflated: a candidate at distance ≤ reach must see every box holding it.
+    const double r = reach * (1 + 1e-9);
+    index->query(Box2{{p[0] - r, p[1] - r}, {p[0] + r, p[1] + r}}, near);
+    double best = std::numeric_limits<double>::infinity();
+    // Keep q when no inclusion other than its owners holds it; a q ON another one (shared
+    // polygon edges, tangencies) is kept only if the matrix reaches it.
+    auto consider = [&](const Vec2& q, std::int32_t k, std::int32_t j) {
+      const double d = std::hypot(q[0] - p[0], q[1] - p[1]);
+      if (d >= best) return;
+      bool on_other = false;
+      for (std::int32_t i : near) {
+        if (i == k || i == j) continue;
+        const int s = side(i, q);
+        if (s > 0) return;
+        if (s == 0) on_other = true;
+      }
+      if (on_other && !(closure_mask(q, near) & matrix_bit)) return;
+      best = d;
+    };
+    for (std::int32_t k : near) {
+      pts.clear();
+      nearest_boundary_points(k, p, pts);
+      for (const Vec2& q : pts) consider(q, k, -1);
+    }
+    for (std::size_t x = 0; x < near.size(); ++x)
+      for (std::size_t y = x + 1; y < near.size(); ++y) {
+        if (!boxes_overlap(items[near[x]].box, items[near[y]].box)) continue;
+        pts.clear();
+        boundary_meetings(near[x], near[y], pts);
+        for (const Vec2& q : pts) consider(q, near[x], near[y]);
+      }
+    if (best <= reach || near.size() == items.size()) return best;
+    reach = std::isfinite(best) ? best : 2 * reach;
+  }
+}
 
 }  // namespace cisamr::geometry

@@ -18,16 +18,10 @@
 #include <vector>
 
 #include "core/types.hpp"
+#include "geometry/crossing.hpp"
 #include "geometry/scene.hpp"
 
 namespace cisamr::geometry {
-
-struct Crossing {
-  double t = 0;            // parameter in (0,1) along a→b
-  std::int32_t inclusion = -1;  // the inclusion whose boundary is crossed (smallest id on ties)
-  std::int32_t from_phase = -1; // phase index just before t
-  std::int32_t to_phase = -1;   // phase index just after t
-};
 
 class Oracle2 {
  public:

@@ -66,6 +66,17 @@ int circle_side(const Vec2& p, const Vec2& c, double r) {
   return sign_of(circle_value<CGAL::Mpzf>(p, c, r));
 }
 
+int disks_side(const Vec2& c1, double r1, const Vec2& c2, double r2) {
+  const double dx = c2[0] - c1[0], dy = c2[1] - c1[1], rs = r1 + r2;
+  const double q = dx * dx + dy * dy, f = rs * rs - q;
+  const double bound = 12 * kEps * (rs * rs + q) + std::numeric_limits<double>::min();
+  if (f > bound) return 1;
+  if (f < -bound) return -1;
+  using M = CGAL::Mpzf;
+  const M ex = M(c2[0]) - M(c1[0]), ey = M(c2[1]) - M(c1[1]), er = M(r1) + M(r2);
+  return static_cast<int>((er * er - (ex * ex + ey * ey)).sign());
+}
+
 int polygon_side(std::span<const Vec2> poly, const Vec2& p) {
   const std::size_t n = poly.size();
   bool inside = false;

@@ -15,6 +15,9 @@ int orientation(const Vec2& a, const Vec2& b, const Vec2& c);
 // sign(r² − |p − c|²): +1 inside the circle, 0 on it, -1 outside.
 int circle_side(const Vec2& p, const Vec2& c, double r);
 
+// sign((r1 + r2)² − |c1 − c2|²): +1 the disks overlap, 0 they touch, -1 apart.
+int disks_side(const Vec2& c1, double r1, const Vec2& c2, double r2);
+
 // Closed polygon (either orientation, simple): +1 strictly inside, 0 on an edge or
 // vertex, -1 strictly outside.
 int polygon_side(std::span<const Vec2> poly, const Vec2& p);

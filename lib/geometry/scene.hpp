@@ -51,6 +51,9 @@ struct StlSurface {
   double scale = 1;
   Rotation3 rotation{{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}};
   Vec3 translate{};
+  // The surface as read from `file` (io fills it; geometry never opens files): triangles
+  // in the file's own coordinates, before scale, rotation and translation.
+  std::vector<std::array<Vec3, 3>> triangles;
 };
 struct NurbsPatch {
   std::array<int, 2> degree{};

@@ -22,9 +22,12 @@ std::atomic<unsigned> temporary_sequence{0};
 // file system (and is therefore atomic). SEQ separates two files of one process.
 std::string temporary_name_for(const std::string& path) {
   const std::filesystem::path destination(path);
-  const std::string name = "." + destination.filename().string() + ".tmp." +
-                           std::to_string(::getpid()) + "." +
-                           std::to_string(temporary_sequence.fetch_add(1));
+  std::string name(1, '.');  // appended piece by piece: GCC 12 warns on "." + string
+  name += destination.filename().string();
+  name += ".tmp.";
+  name += std::to_string(::getpid());
+  name += '.';
+  name += std::to_string(temporary_sequence.fetch_add(1));
   return (destination.parent_path() / name).string();
 }
 

@@ -177,9 +177,20 @@ void write_vtu_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m,
   xml += "  <UnstructuredGrid>\n";
   xml += "    <Piece NumberOfPoints=\"" + std::to_string(nodes) + "\" NumberOfCells=\"" +
          std::to_string(cells) + "\">\n";
+  // The appended blocks are laid out in the reverse of the declaration order. VTK does not
+  // care; meshio (5.x) rewrites offsets one by one while looking tags up by offset, and
+  // mixes up two arrays when a rewritten offset equals a later raw one: with the reverse
+  // layout the tag it must find always comes first in the document.
+  constexpr std::size_t kArrays = sizeof(arrays) / sizeof(arrays[0]);
+  std::uint64_t offsets_of[kArrays];
   std::uint64_t offset = 0;
+  for (std::size_t k = kArrays; k-- > 0;) {
+    offsets_of[k] = offset;
+    offset += 8 + arrays[k].bytes;
+  }
   std::string_view open_section;
-  for (const Array& a : arrays) {
+  for (std::size_t k = 0; k < kArrays; ++k) {
+    const Array& a = arrays[k];
     if (open_section != a.where) {
       if (!open_section.empty()) xml += "      </" + std::string(open_section) + ">\n";
       open_section = a.where;
@@ -189,28 +200,22 @@ void write_vtu_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m,
     xml += "        <DataArray type=\"" + std::string(a.type) + "\" Name=\"" + a.name + "\"";
     if (a.components != 1)
       xml += " NumberOfComponents=\"" + std::to_string(a.components) + "\"";
-    xml += " format=\"appended\" offset=\"" + std::to_string(offset) + "\"/>\n";
-    offset += 8 + a.bytes;
+    xml += " format=\"appended\" offset=\"" + std::to_string(offsets_of[k]) + "\"/>\n";
   }
   xml += "      </" + std::string(open_section) + ">\n";
   xml += "    </Piece>\n  </UnstructuredGrid>\n  <AppendedData encoding=\"raw\">\n   _";
   file.write(xml);
 
-  // global_id
-  if (m.node_global_id.empty())
-    write_array_chunked<std::int64_t>(file, nodes, [](std::size_t i) { return std::int64_t(i); });
+  // Blocks in reverse declaration order (see above).
+  const std::uint8_t cell_type = Dim == 2 ? 5 : 10;  // VTK_TRIANGLE, VTK_TETRA
+  write_array_chunked<std::uint8_t>(file, cells, [&](std::size_t) { return cell_type; });
+  if (wide_offsets)
+    write_array_chunked<std::int64_t>(
+        file, cells, [](std::size_t c) { return std::int64_t(c + 1) * kCorners; });
   else
-    write_array_raw(file, m.node_global_id);
-  write_array_raw(file, m.cell_phase);
-  if (m.cell_partition.empty())
-    write_array_chunked<std::int32_t>(file, cells, [](std::size_t) { return 0; });
-  else
-    write_array_raw(file, m.cell_partition);
-  if (options.cell_aspect_ratio.empty())
-    write_array_chunked<double>(file, cells,
-                                [&](std::size_t c) { return mesh::cell_aspect_ratio(m, c); });
-  else
-    write_array_raw(file, options.cell_aspect_ratio);
+    write_array_chunked<std::int32_t>(
+        file, cells, [](std::size_t c) { return std::int32_t(c + 1) * kCorners; });
+  write_array_raw(file, m.cell_nodes);
   if constexpr (Dim == 3) {
     write_array_raw(file, m.coords);
   } else {
@@ -219,15 +224,20 @@ void write_vtu_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m,
       return axis < 2 ? m.coords[node * 2 + axis] : 0.0;
     });
   }
-  write_array_raw(file, m.cell_nodes);
-  if (wide_offsets)
-    write_array_chunked<std::int64_t>(
-        file, cells, [](std::size_t c) { return std::int64_t(c + 1) * kCorners; });
+  if (options.cell_aspect_ratio.empty())
+    write_array_chunked<double>(file, cells,
+                                [&](std::size_t c) { return mesh::cell_aspect_ratio(m, c); });
   else
-    write_array_chunked<std::int32_t>(
-        file, cells, [](std::size_t c) { return std::int32_t(c + 1) * kCorners; });
-  const std::uint8_t cell_type = Dim == 2 ? 5 : 10;  // VTK_TRIANGLE, VTK_TETRA
-  write_array_chunked<std::uint8_t>(file, cells, [&](std::size_t) { return cell_type; });
+    write_array_raw(file, options.cell_aspect_ratio);
+  if (m.cell_partition.empty())
+    write_array_chunked<std::int32_t>(file, cells, [](std::size_t) { return 0; });
+  else
+    write_array_raw(file, m.cell_partition);
+  write_array_raw(file, m.cell_phase);
+  if (m.node_global_id.empty())
+    write_array_chunked<std::int64_t>(file, nodes, [](std::size_t i) { return std::int64_t(i); });
+  else
+    write_array_raw(file, m.node_global_id);
   file.write("\n  </AppendedData>\n</VTKFile>\n");
 }
 

@@ -14,6 +14,7 @@
 
 #include "core/error.hpp"
 #include "io/atomic_file.hpp"
+#include "io/stl_io.hpp"
 
 namespace cisamr::io {
 namespace {
@@ -431,6 +432,7 @@ class SceneReader {
       std::ifstream probe(s.file, std::ios::binary);
       if (!probe)
         fail(file_field, "cannot read '" + s.file + "': " + std::strerror(errno));
+      s.triangles = read_stl(s.file);  // its own errors name the STL file and line
       if (const json* v = member(object, "scale")) s.scale = positive(*v, join(field, "scale"));
       if (const json* r = member(object, "rotation")) s.rotation = rotation(*r, join(field, "rotation"));
       if (const json* t = member(object, "translate")) s.translate = vec<3>(*t, join(field, "translate"));

@@ -52,12 +52,16 @@ Result2 run2(const geometry::Oracle2& oracle, const grid::Lattice2& lattice, con
 
   subdivide::Triangles2 tris = [&] {
     ScopedPhase timer(&stats.times, "subdivide");
-    return subdivide::subdivide2(oracle, grid, nodes, box);
+    return subdivide::subdivide2(oracle, grid, nodes, box, options.alpha);
   }();
   stats.cut_quads = tris.cut_quads;
   stats.double_diagonal = tris.double_diagonal;
   stats.hanging_cells = tris.hanging_cells;
   stats.unresolved = tris.unresolved;
+  stats.collapsed = tris.collapsed;
+  stats.max_collapse_deviation = tris.max_collapse_deviation;
+  stats.min_collapse_level = tris.collapsed ? tris.min_collapse_level : -1;
+  stats.max_level = lattice.max_level;
 
   {
     ScopedPhase timer(&stats.times, "assemble");

@@ -20,6 +20,10 @@ struct Stats {
   std::int64_t coarse_cells = 0, leaves = 0, refinements = 0;
   std::int64_t lattice_nodes = 0, snapped_nodes = 0;
   std::int64_t cut_quads = 0, double_diagonal = 0, hanging_cells = 0, unresolved = 0;
+  std::int64_t collapsed = 0;          // quads holding a feature below their resolution
+  double max_collapse_deviation = 0;   // largest node distance from a phase it serves
+  int min_collapse_level = -1;         // coarsest level of a collapse (-1: none)
+  int max_level = 0;                   // Lmax of the lattice
   PhaseTimes times;
 };
 

@@ -360,7 +360,8 @@ ConformityReport check_conformity(const mesh::SimplexMesh<Dim>& m, const Box<Dim
     const double s = signed_measure(m, cn);
     measure += std::abs(s);
     const double l = longest_edge(m, cn, Dim + 1);
-    if (!(std::abs(s) > kDegenerateTolerance * std::pow(l, Dim))) {
+    const double scale = Dim == 2 ? l * l : l * l * l;
+    if (!(std::abs(s) > kDegenerateTolerance * scale)) {
       ++r.degenerate_cells;
       if (ex.wants("degenerate"))
         ex.add("degenerate cell " + std::to_string(c) + ": " + nodes_text(m, std::span<const LocalId>(cn, Dim + 1)));
@@ -409,7 +410,7 @@ ConformityReport check_conformity(const mesh::SimplexMesh<Dim>& m, const Box<Dim
       }
     }
   });
-  find_hanging_nodes(m, open_inside, r, ex);
+  find_hanging_nodes<Dim>(m, open_inside, r, ex);
 
   if (expected_measure >= 0) {
     const double diff = std::abs(measure - expected_measure);

@@ -32,6 +32,14 @@ class Refiner {
 
   int max_level() const { return g_.forest.lattice().max_level; }
 
+  // Does cell c touch the domain boundary? (An interface there either crosses the domain
+  // boundary or leaves a gap to it; both need the finest resolution.)
+  bool on_domain_boundary(std::int32_t c) const {
+    const grid::Lattice2& l = g_.forest.lattice();
+    const std::int64_t x = g_.forest.fine_x(c), y = g_.forest.fine_y(c), s = g_.forest.fine_size(c);
+    return x == 0 || y == 0 || x + s == l.coarse_cells[0] * l.units(0) || y + s == l.coarse_cells[1] * l.units(0);
+  }
+
   void visit(std::int32_t c) {
     const auto cell = g_.forest.cell(c);
     const int level = cell.level;
@@ -39,8 +47,13 @@ class Refiner {
     if (level >= 2) {
       static constexpr int kEdge[4][2] = {{1, 0}, {-1, 0}, {0, 1}, {0, -1}};
       for (const auto& e : kEdge) {
-        const std::int32_t n = g_.forest.find(level, cell.i + e[0], cell.j + e[1]);
-        if (n >= 0 && g_.forest.is_leaf(n) && g_.forest.cell(n).level < level - 1) refine(n);
+        // Refine the neighbour until it is at most one level coarser (it may start
+        // several levels coarser; each refinement creates the next level down).
+        while (true) {
+          const std::int32_t n = g_.forest.find(level, cell.i + e[0], cell.j + e[1]);
+          if (n < 0 || !g_.forest.is_leaf(n) || g_.forest.cell(n).level >= level - 1) break;
+          refine(n);
+        }
       }
     }
     if (!g_.is_cut(c)) return;
@@ -52,7 +65,12 @@ class Refiner {
       const int group = oracle_.interface_group(k);
       if (std::find(groups_.begin(), groups_.end(), group) == groups_.end()) groups_.push_back(group);
     }
-    if (groups_.size() >= 2 && level < max_level()) split = true;
+    // R2 and R5: two interface groups, or the boundaries of two inclusions (a C0 corner of
+    // a union), or an interface on the domain boundary (crossing it, or leaving a gap to
+    // it): features that may be sharp or thin, resolved down to the finest level.
+    if (level < max_level() && (groups_.size() >= 2 || g_.touch_count[static_cast<std::size_t>(c)] >= 2 ||
+                                on_domain_boundary(c)))
+      split = true;
     // R4: the 3x3 block around a cut cell has its level; the 5x5 block (less corners)
     // holds no finer cell, so neighbours of the cut cell carry no hanging node.
     if (!split) {
@@ -65,7 +83,10 @@ class Refiner {
             split = true;
             break;
           }
-          if (std::abs(di) <= 1 && std::abs(dj) <= 1 && g_.forest.cell(n).level < level) refine(n);
+          if (std::abs(di) <= 1 && std::abs(dj) <= 1)
+            for (std::int32_t m = n; g_.forest.is_leaf(m) && g_.forest.cell(m).level < level;
+                 m = g_.forest.find(level, cell.i + di, cell.j + dj))
+              refine(m);
         }
     }
     if (split) refine(c);

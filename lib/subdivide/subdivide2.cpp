@@ -1,6 +1,8 @@
 #include "subdivide/subdivide2.hpp"
 
 #include <algorithm>
+#include <cstdio>
+#include <cstdlib>
 #include <bit>
 #include <limits>
 
@@ -44,8 +46,9 @@ double split_quality(const QuadPoints& q, const std::array<Tri, N>& tris) {
 
 class Subdivider {
  public:
-  Subdivider(const geometry::Oracle2& oracle, const samr::RefinedGrid2& g, const radapt::Nodes2& nodes)
-      : oracle_(oracle), g_(g), forest_(g.forest), nodes_(nodes) {}
+  Subdivider(const geometry::Oracle2& oracle, const samr::RefinedGrid2& g, const radapt::Nodes2& nodes,
+             double collapse_fraction)
+      : oracle_(oracle), g_(g), forest_(g.forest), nodes_(nodes), collapse_fraction_(collapse_fraction) {}
 
   Triangles2 run(const grid::CellRange<2>& owned) {
     for (std::int32_t c = 0; c < static_cast<std::int32_t>(forest_.size()); ++c) {
@@ -62,6 +65,7 @@ class Subdivider {
   const samr::RefinedGrid2& g_;
   const grid::QuadForest& forest_;
   const radapt::Nodes2& nodes_;
+  const double collapse_fraction_;
   Triangles2 out_;
   std::vector<geometry::Crossing> crossings_;
 
@@ -111,7 +115,7 @@ class Subdivider {
       emit(q.id[0], q.id[2], q.id[3], phase);
       return;
     }
-    split_quad(q, candidates);
+    split_quad(q, candidates, level);
   }
 
   void closure(QuadPoints& q, int hanging, const std::int64_t* cx, const std::int64_t* cy, std::int64_t s) {
@@ -142,50 +146,99 @@ class Subdivider {
     }
   }
 
-  void split_quad(QuadPoints& q, std::span<const std::int32_t> candidates) {
-    const bool cut = (q.m[0] & q.m[1] & q.m[2] & q.m[3]) == 0;
-    if (cut) ++out_.cut_quads;
-    double best = split_quality(q, templates2::kDiagonal02);
-    int choice = 0;  // 0: diagonal 0-2, 1: diagonal 1-3, 2: double diagonal
+  struct SplitChoice {
+    double worst = std::numeric_limits<double>::infinity();
+    int kind = 0;  // 0: diagonal 0-2, 1: diagonal 1-3, 2: double diagonal
+    Vec2 point{};
+    PhaseMask point_mask = 0;
+  };
+
+  // The admissible split of lowest worst aspect ratio (worst = +inf when none is).
+  SplitChoice best_split(QuadPoints& q, std::span<const std::int32_t> candidates) {
+    SplitChoice best;
+    best.worst = split_quality(q, templates2::kDiagonal02);
     const double d13 = split_quality(q, templates2::kDiagonal13);
-    if (d13 < best) best = d13, choice = 1;
+    if (d13 < best.worst) best.worst = d13, best.kind = 1;
     // Double diagonal: a point of the interface on the diagonal the interface crosses.
-    Vec2 best_point{};
-    PhaseMask best_point_mask = 0;
-    if (cut) {
-      for (int diag = 0; diag < 2; ++diag) {
-        const int a = diag == 0 ? 1 : 0, b = diag == 0 ? 3 : 2;  // the crossed diagonal
-        if (q.m[a] & q.m[b]) continue;
-        const bool a_first = nodes_.key[static_cast<std::size_t>(q.id[a])] < nodes_.key[static_cast<std::size_t>(q.id[b])];
-        const Vec2 pa = q.p[a_first ? a : b], pb = q.p[a_first ? b : a];
-        oracle_.crossings(pa, pb, candidates, crossings_);
-        for (const auto& cr : crossings_) {
-          q.p[templates2::kDiagonalPoint] = {pa[0] + cr.t * (pb[0] - pa[0]), pa[1] + cr.t * (pb[1] - pa[1])};
-          q.m[templates2::kDiagonalPoint] = (PhaseMask{1} << cr.from_phase) | (PhaseMask{1} << cr.to_phase);
-          const double quality = split_quality(q, templates2::kDoubleDiagonal);
-          if (quality < best) {
-            best = quality, choice = 2;
-            best_point = q.p[templates2::kDiagonalPoint];
-            best_point_mask = q.m[templates2::kDiagonalPoint];
-          }
+    for (int diag = 0; diag < 2; ++diag) {
+      const int a = diag == 0 ? 1 : 0, b = diag == 0 ? 3 : 2;  // the crossed diagonal
+      if (q.m[a] & q.m[b]) continue;
+      const bool a_first = nodes_.key[static_cast<std::size_t>(q.id[a])] < nodes_.key[static_cast<std::size_t>(q.id[b])];
+      const Vec2 pa = q.p[a_first ? a : b], pb = q.p[a_first ? b : a];
+      oracle_.crossings(pa, pb, candidates, crossings_);
+      for (const auto& cr : crossings_) {
+        q.p[templates2::kDiagonalPoint] = {pa[0] + cr.t * (pb[0] - pa[0]), pa[1] + cr.t * (pb[1] - pa[1])};
+        q.m[templates2::kDiagonalPoint] = (PhaseMask{1} << cr.from_phase) | (PhaseMask{1} << cr.to_phase);
+        const double quality = split_quality(q, templates2::kDoubleDiagonal);
+        if (quality < best.worst) {
+          best.worst = quality, best.kind = 2;
+          best.point = q.p[templates2::kDiagonalPoint];
+          best.point_mask = q.m[templates2::kDiagonalPoint];
         }
       }
     }
-    if (!(best < std::numeric_limits<double>::infinity())) {
-      // No phase-consistent split: a configuration below the finest level's resolution.
+    return best;
+  }
+
+  void split_quad(QuadPoints& q, std::span<const std::int32_t> candidates, int level) {
+    const bool cut = (q.m[0] & q.m[1] & q.m[2] & q.m[3]) == 0;
+    if (cut) ++out_.cut_quads;
+    SplitChoice choice = best_split(q, candidates);
+    if (!(choice.worst < std::numeric_limits<double>::infinity())) {
+      // A feature below this level's resolution (a tangency, a wedge sharper than the
+      // quality bound allows): collapse it. Each corner also counts as lying in the phases
+      // whose closure is within reach of it, reach growing from alpha·h_l to 3·alpha·h_l
+      // until a split is admissible; the largest distance used is reported.
+      const PhaseMask present = q.m[0] | q.m[1] | q.m[2] | q.m[3];
+      double distance[4][64];
+      for (int k = 0; k < 4; ++k)
+        for (PhaseMask rest = present & ~q.m[k]; rest; rest &= rest - 1)
+          distance[k][std::countr_zero(rest)] = oracle_.distance_to_phase(q.p[k], std::countr_zero(rest));
+      const PhaseMask original[4] = {q.m[0], q.m[1], q.m[2], q.m[3]};
+      double deviation = 0;
+      for (int step = 1; step <= 3 && !(choice.worst < std::numeric_limits<double>::infinity()); ++step) {
+        const double reach = step * collapse_fraction_ * forest_.lattice().spacing(level);
+        deviation = 0;
+        for (int k = 0; k < 4; ++k) {
+          q.m[k] = original[k];
+          for (PhaseMask rest = present & ~original[k]; rest; rest &= rest - 1) {
+            const int phase = std::countr_zero(rest);
+            if (distance[k][phase] <= reach) {
+              q.m[k] |= PhaseMask{1} << phase;
+              deviation = std::max(deviation, distance[k][phase]);
+            }
+          }
+        }
+        choice = best_split(q, candidates);
+      }
+      if (choice.worst < std::numeric_limits<double>::infinity()) {
+        ++out_.collapsed;
+        out_.max_collapse_deviation = std::max(out_.max_collapse_deviation, deviation);
+        out_.min_collapse_level = std::min(out_.min_collapse_level, level);
+        if (out_.collapsed_at.size() < 16)
+          out_.collapsed_at.push_back({0.25 * (q.p[0][0] + q.p[1][0] + q.p[2][0] + q.p[3][0]),
+                                       0.25 * (q.p[0][1] + q.p[1][1] + q.p[2][1] + q.p[3][1])});
+      }
+    }
+    if (!(choice.worst < std::numeric_limits<double>::infinity())) {
       ++out_.unresolved;
-      best = 0;
-      choice = 0;
+      if (out_.unresolved_at.size() < 16)
+        out_.unresolved_at.push_back({0.25 * (q.p[0][0] + q.p[1][0] + q.p[2][0] + q.p[3][0]),
+                                      0.25 * (q.p[0][1] + q.p[1][1] + q.p[2][1] + q.p[3][1])});
+      if (std::getenv("CISAMR_DEBUG_UNRESOLVED"))
+        for (int k = 0; k < 4; ++k)
+          std::fprintf(stderr, "  corner %d (%.12g, %.12g) mask %llx snapped %d\n", k, q.p[k][0], q.p[k][1],
+                       static_cast<unsigned long long>(q.m[k]), nodes_.snapped[static_cast<std::size_t>(q.id[k])]);
       emit_split(q, templates2::kDiagonal02, candidates, true);
       return;
     }
-    if (choice == 0) emit_split(q, templates2::kDiagonal02, candidates, false);
-    else if (choice == 1) emit_split(q, templates2::kDiagonal13, candidates, false);
+    if (choice.kind == 0) emit_split(q, templates2::kDiagonal02, candidates, false);
+    else if (choice.kind == 1) emit_split(q, templates2::kDiagonal13, candidates, false);
     else {
       ++out_.double_diagonal;
-      q.p[templates2::kDiagonalPoint] = best_point;
-      q.m[templates2::kDiagonalPoint] = best_point_mask;
-      q.id[templates2::kDiagonalPoint] = add_point(best_point);
+      q.p[templates2::kDiagonalPoint] = choice.point;
+      q.m[templates2::kDiagonalPoint] = choice.point_mask;
+      q.id[templates2::kDiagonalPoint] = add_point(choice.point);
       emit_split(q, templates2::kDoubleDiagonal, candidates, false);
     }
   }
@@ -205,8 +258,8 @@ class Subdivider {
 }  // namespace
 
 Triangles2 subdivide2(const geometry::Oracle2& oracle, const samr::RefinedGrid2& grid,
-                      const radapt::Nodes2& nodes, const grid::CellRange<2>& owned) {
-  return Subdivider(oracle, grid, nodes).run(owned);
+                      const radapt::Nodes2& nodes, const grid::CellRange<2>& owned, double collapse_fraction) {
+  return Subdivider(oracle, grid, nodes, collapse_fraction).run(owned);
 }
 
 }  // namespace cisamr::subdivide

@@ -20,10 +20,17 @@ struct Triangles2 {
   std::vector<std::int32_t> phase;      // phase index per triangle
   std::int64_t cut_quads = 0, double_diagonal = 0, hanging_cells = 0;
   std::int64_t unresolved = 0;          // quads no template could split phase-consistently
+  std::vector<Vec2> unresolved_at;      // centres of the first few unresolved quads
+  // Features below the resolution of their cell, collapsed (see README.md).
+  std::int64_t collapsed = 0;
+  double max_collapse_deviation = 0;    // largest distance of a node from a phase it serves
+  int min_collapse_level = 1 << 20;     // coarsest level at which a collapse happened
+  std::vector<Vec2> collapsed_at;
 };
 
 // Triangulates the leaves whose coarse ancestor lies in `owned` (the partition box).
 Triangles2 subdivide2(const geometry::Oracle2& oracle, const samr::RefinedGrid2& grid,
-                      const radapt::Nodes2& nodes, const grid::CellRange<2>& owned);
+                      const radapt::Nodes2& nodes, const grid::CellRange<2>& owned,
+                      double collapse_fraction = 0.5);
 
 }  // namespace cisamr::subdivide

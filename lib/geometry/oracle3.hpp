@@ -1,0 +1,82 @@
+#pragma once
+// The 3D geometry oracle: every geometric question the mesher asks about a scene.
+// CGAL lives behind this header (pimpl), in oracle3.cpp and its helpers only.
+//
+// Phases are referred to by *index* into SceneDesc::phases (not by id), so that a set of
+// phases fits in a PhaseMask. Inclusions are referred to by their index in
+// SceneDesc::inclusions.
+//
+// Determinism contract (partition invariance depends on it): every answer depends only
+// on the arguments and on the inclusions involved, never on the candidate list beyond
+// which inclusions it contains, nor on call order, nor on threads. In particular
+// crossings(a, b, ...) returns bit-identical doubles for the same (a, b) whatever extra
+// candidates are passed. Callers orient segments canonically (from the smaller lattice
+// key) so that both neighbours ask the same question.
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <vector>
+
+#include "core/types.hpp"
+#include "geometry/crossing.hpp"
+#include "geometry/scene.hpp"
+
+namespace cisamr::geometry {
+
+class Oracle3 {
+ public:
+  // Builds the shape evaluators and the AABB tree over inclusion boxes. Validates the
+  // geometry and throws InputError(scene.source, "inclusions[i]...", ...) for: degenerate
+  // or invalid shapes (non-positive radius/semi-axis, zero-length cylinder, rotation not
+  // orthonormal; an STL surface that is open, non-manifold, self-intersecting or
+  // inconsistently oriented: the message names the file and the first bad face), and overlapping
+  // inclusions of different phases (the message names both).
+  explicit Oracle3(const SceneDesc& scene);
+  ~Oracle3();
+  Oracle3(Oracle3&&) noexcept;
+  Oracle3& operator=(Oracle3&&) noexcept;
+
+  const SceneDesc& scene() const;
+  int inclusion_count() const;
+  int phase_count() const;
+  int matrix_phase() const;               // phase index of the matrix
+  int phase_of(std::int32_t inclusion) const;  // phase index
+  int levels_of(std::int32_t inclusion) const;
+  // Same-phase inclusions that overlap (transitively) form one interface group; the
+  // group id is the smallest inclusion index in it.
+  int interface_group(std::int32_t inclusion) const;
+  Box3 bounding_box(std::int32_t inclusion) const;  // tight (or slightly loose) box
+
+  // Inclusions whose bounding box meets the closed box, ascending. CGAL AABB tree.
+  void candidates(const Box3& box, std::vector<std::int32_t>& out) const;
+
+  // Does the boundary surface of `inclusion` meet the closed box? Conservative: never
+  // false when it does; may be true when the curve passes within ~1e-12·(box size).
+  bool boundary_touches(std::int32_t inclusion, const Box3& box) const;
+
+  // Phases whose closed region contains p (bit = phase index): one bit in the interior of
+  // a phase, two or more on an interface. Exact for spheres (and STL faces, whose planes are exact).
+  PhaseMask closure_phases(const Vec3& p, std::span<const std::int32_t> candidates) const;
+
+  // The phase index at p if p is interior to one phase; on an interface, the phase of
+  // the lowest-index inclusion whose boundary holds p.
+  int phase_at(const Vec3& p, std::span<const std::int32_t> candidates) const;
+
+  // Where the open segment a→b changes phase, ascending in t. Tangential touches and
+  // boundaries inside same-phase unions are not crossings. Output is cleared first.
+  void crossings(const Vec3& a, const Vec3& b, std::span<const std::int32_t> candidates,
+                 std::vector<Crossing>& out) const;
+
+  // Volume of each phase inside the domain (voids included), exact for spheres, ellipsoids
+  // and cylinders inside the box without overlaps; otherwise accurate to 1e-9 relative.
+  std::vector<double> phase_volumes() const;
+
+  // Distance from p to the closed region of a phase (0 inside or on its boundary).
+  double distance_to_phase(const Vec3& p, int phase_index) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace cisamr::geometry

@@ -1,0 +1,14 @@
+#pragma once
+// 3D halves of the shapes.hpp functions (shapes3.cpp), private to lib/geometry.
+#include <vector>
+
+#include "geometry/scene.hpp"
+
+namespace cisamr::geometry::detail {
+Box3 bounding_box3(const Shape& s);
+double measure3(const Shape& s);
+double boundary_measure3(const Shape& s);
+std::vector<Vec3> boundary_samples3(const Shape& s, double spacing);
+bool contains3(const Shape& s, const Vec3& p);
+bool overlap3(const Shape& a, const Shape& b, double gap);
+}  // namespace cisamr::geometry::detail

@@ -1,0 +1,52 @@
+#pragma once
+// The load density on (a possibly coarsened copy of) the background lattice:
+// cell (i,j,k) holds Σ_k R_k^M × (the part of |A_k| inside the cell), and a summed-volume
+// table answers the load of any lattice-aligned box in O(1). Internal to lib/partition.
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "core/types.hpp"
+#include "geometry/scene.hpp"
+#include "partition/partition.hpp"
+
+namespace cisamr::partition {
+
+struct LoadField {
+  int dim = 2;
+  Box3 domain{};
+  double h = 1;
+  bool periodic = false;
+  double exponent = 1;
+  std::array<std::int64_t, 3> lattice_cells{1, 1, 1};  // background cells per axis
+  std::int64_t coarsen = 1;                             // raster cell = coarsen × h (last may be shorter)
+  std::array<std::int64_t, 3> n{1, 1, 1};               // raster cells per axis
+  std::vector<double> cells;                            // load per raster cell, x fastest
+  std::vector<double> prefix;                           // (n+1)-sized summed-volume table
+
+  // Background-lattice index of raster line i along `axis`.
+  std::int64_t lattice_index(int axis, std::int64_t i) const {
+    return std::min(i * coarsen, lattice_cells[axis]);
+  }
+  double coordinate(int axis, std::int64_t i) const { return domain.min[axis] + lattice_index(axis, i) * h; }
+  // Load of raster box [lo, hi) (half-open raster indices).
+  double box_load(const std::array<std::int64_t, 3>& lo, const std::array<std::int64_t, 3>& hi) const;
+  double total() const;
+};
+
+LoadField build_load_field(const geometry::SceneDesc& scene, const PartitionOptions& options);
+
+// Levels R_k used for an inclusion (its own, else the scene's; at least 1: an inclusion
+// without refinement still costs its cut elements).
+int effective_levels(const geometry::SceneDesc& scene, const geometry::Inclusion& inc);
+
+// Axis-aligned bounding box of any scene shape (STL and NURBS surfaces: of their samples).
+Box3 inclusion_box(const geometry::Shape& s, int dim);
+
+// Points on a NURBS curve, uniformly in the parameter over its valid range.
+std::vector<Vec2> nurbs_polyline(const geometry::NurbsCurve& c, int samples);
+
+// Exact perimeter of an ellipse (arithmetic–geometric mean).
+double ellipse_perimeter(double a, double b);
+
+}  // namespace cisamr::partition

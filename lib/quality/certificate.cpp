@@ -1,0 +1,412 @@
+// The certificate: assembling the checks and rendering them as JSON, HTML and text.
+#include "quality/certificate.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+namespace cisamr::quality {
+namespace {
+
+using Json = nlohmann::ordered_json;
+
+std::string num(double v, int digits = 6) {
+  if (std::isnan(v)) return "n/a";
+  if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
+  char buf[48];
+  std::snprintf(buf, sizeof buf, "%.*g", digits, v);
+  return buf;
+}
+
+std::string html_escape(const std::string& s) {
+  std::string out;
+  out.reserve(s.size());
+  for (char ch : s) {
+    switch (ch) {
+      case '&': out += "&amp;"; break;
+      case '<': out += "&lt;"; break;
+      case '>': out += "&gt;"; break;
+      case '"': out += "&quot;"; break;
+      default: out += ch;
+    }
+  }
+  return out;
+}
+
+// Non-finite numbers become null (JSON has no inf/NaN).
+Json number(double v) { return std::isfinite(v) ? Json(v) : Json(nullptr); }
+
+std::string phase_label(const Certificate& c, int id) {
+  for (const auto& [pid, name] : c.phase_names)
+    if (pid == id && !name.empty()) return std::to_string(id) + " (" + name + ")";
+  return std::to_string(id);
+}
+
+// ---- the conformity counters, in one table for every rendering ------------------------
+struct Counter {
+  const char* key;
+  const char* label;
+  std::size_t value;
+  bool is_error;
+};
+
+std::vector<Counter> conformity_counters(const ConformityReport& r) {
+  return {
+      {"duplicate_nodes", "duplicate nodes", r.duplicate_nodes, true},
+      {"degenerate_cells", "degenerate cells", r.degenerate_cells, true},
+      {"inverted_cells", "inverted cells", r.inverted_cells, true},
+      {"bad_node_references", "cells naming missing nodes", r.bad_node_references, true},
+      {"non_manifold_facets", "facets shared by more than 2 cells", r.non_manifold_facets, true},
+      {"mismatched_orientation_facets", "facets with mismatched orientation", r.mismatched_orientation_facets, true},
+      {"open_facets_inside", "open facets inside the domain", r.open_facets_inside, true},
+      {"hanging_nodes", "hanging nodes (T-junctions)", r.hanging_nodes, true},
+      {"unused_nodes", "unused nodes", r.unused_nodes, true},
+      {"inner_boundary_facets", "void-boundary facets (allowed)", r.inner_boundary_facets, false},
+      {"boundary_facets", "facets on the domain box", r.boundary_facets, false},
+  };
+}
+
+std::vector<Counter> fidelity_counters(const FidelityReport& f) {
+  return {
+      {"nodes_off_phase", "nodes off their phase", f.nodes_off_phase, true},
+      {"interface_nodes_off_interface", "interface nodes off the interface", f.interface_nodes_off_interface, true},
+      {"boundary_nodes_off_void", "void-boundary nodes off every void", f.boundary_nodes_off_void, true},
+      {"cells_unknown_phase", "cells of an unknown or void phase", f.cells_unknown_phase, true},
+  };
+}
+
+bool measure_checked(const ConformityReport& r) { return r.expected_measure >= 0; }
+bool measure_ok(const ConformityReport& r) { return !measure_checked(r) || r.measure_error <= r.measure_tolerance; }
+
+// ---- the SVG histogram -----------------------------------------------------------------
+std::string histogram_svg(const AspectStats& s) {
+  const std::size_t bins = s.histogram.size();
+  std::ostringstream o;
+  if (bins == 0 || s.bin_edges.empty()) return "<p>No cells.</p>";
+  const double width = 760, height = 320, left = 64, right = 16, top = 16, bottom = 44;
+  const double plot_w = width - left - right, plot_h = height - top - bottom;
+  const double bar_w = plot_w / static_cast<double>(bins);
+  const std::size_t peak = *std::max_element(s.histogram.begin(), s.histogram.end());
+  const double log_peak = std::log10(1.0 + static_cast<double>(std::max<std::size_t>(peak, 1)));
+  auto y_of = [&](double count) { return top + plot_h * (1 - std::log10(1.0 + count) / log_peak); };
+  auto x_of_ar = [&](double ar) { return left + (ar - s.bin_edges.front()) / kHistogramBinWidth * bar_w; };
+
+  o << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << width << "\" height=\"" << height
+    << "\" viewBox=\"0 0 " << width << ' ' << height << "\" font-family=\"sans-serif\" font-size=\"11\">\n";
+  o << "<rect x=\"" << left << "\" y=\"" << top << "\" width=\"" << plot_w << "\" height=\"" << plot_h
+    << "\" fill=\"#fafafa\" stroke=\"#999\"/>\n";
+  // Log-scale count ticks: 1, 10, 100, ...
+  for (double t = 1; t <= static_cast<double>(std::max<std::size_t>(peak, 1)) * 1.0001; t *= 10) {
+    const double y = y_of(t);
+    o << "<line x1=\"" << left - 4 << "\" y1=\"" << y << "\" x2=\"" << left + plot_w << "\" y2=\"" << y
+      << "\" stroke=\"#ddd\"/>\n";
+    o << "<text x=\"" << left - 6 << "\" y=\"" << y + 4 << "\" text-anchor=\"end\">" << num(t) << "</text>\n";
+  }
+  for (std::size_t i = 0; i < bins; ++i) {
+    if (s.histogram[i] == 0) continue;
+    const bool overflow = i + 1 == bins;
+    const double y = y_of(static_cast<double>(s.histogram[i]));
+    const double lo = s.bin_edges[std::min(i, s.bin_edges.size() - 1)];
+    const bool above = overflow || lo >= s.bound;
+    std::ostringstream range;
+    if (overflow)
+      range << "&#8805; " << num(lo);
+    else
+      range << '[' << num(lo) << ", " << num(s.bin_edges[i + 1]) << ')';
+    o << "<rect x=\"" << left + bar_w * static_cast<double>(i) << "\" y=\"" << y << "\" width=\""
+      << std::max(bar_w - 0.5, 0.5) << "\" height=\"" << top + plot_h - y << "\" fill=\""
+      << (overflow ? "#7a1f1f" : above ? "#d9822b" : "#3b73b9") << "\"><title>" << range.str() << ": "
+      << s.histogram[i] << "</title></rect>\n";
+  }
+  // Aspect-ratio ticks every 0.5 (or coarser when there are many bins).
+  const double span = s.bin_edges.back() - s.bin_edges.front();
+  const double step = span <= 6 ? 0.5 : span <= 20 ? 1 : span <= 60 ? 5 : 10;
+  for (double t = s.bin_edges.front(); t <= s.bin_edges.back() + 1e-9; t += step) {
+    const double x = x_of_ar(t);
+    o << "<line x1=\"" << x << "\" y1=\"" << top + plot_h << "\" x2=\"" << x << "\" y2=\"" << top + plot_h + 4
+      << "\" stroke=\"#333\"/>\n";
+    o << "<text x=\"" << x << "\" y=\"" << top + plot_h + 16 << "\" text-anchor=\"middle\">" << num(t) << "</text>\n";
+  }
+  o << "<text x=\"" << left + plot_w - bar_w / 2 << "\" y=\"" << top + plot_h + 28
+    << "\" text-anchor=\"middle\" fill=\"#7a1f1f\">&#8805;</text>\n";
+  o << "<text x=\"" << left + plot_w / 2 << "\" y=\"" << height - 4 << "\" text-anchor=\"middle\">aspect ratio</text>\n";
+  o << "<text x=\"14\" y=\"" << top + plot_h / 2 << "\" text-anchor=\"middle\" transform=\"rotate(-90 14 "
+    << top + plot_h / 2 << ")\">cells (log scale)</text>\n";
+  if (s.bound >= s.bin_edges.front() && s.bound <= s.bin_edges.back()) {
+    const double x = x_of_ar(s.bound);
+    o << "<line x1=\"" << x << "\" y1=\"" << top << "\" x2=\"" << x << "\" y2=\"" << top + plot_h
+      << "\" stroke=\"red\" stroke-width=\"2\"/>\n";
+    o << "<text x=\"" << x + 4 << "\" y=\"" << top + 12 << "\" fill=\"red\">bound " << num(s.bound) << "</text>\n";
+  }
+  o << "</svg>\n";
+  return o.str();
+}
+
+std::string status_cell(bool good) {
+  return good ? "<td class=\"ok\">ok</td>" : "<td class=\"bad\">FAIL</td>";
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------
+
+template <int Dim>
+Certificate certify(const mesh::SimplexMesh<Dim>& m, const Box<Dim>& domain, const CertifyOptions& options) {
+  Certificate c;
+  c.dimension = Dim;
+  c.node_count = m.node_count();
+  c.cell_count = m.cell_count();
+  for (int d = 0; d < Dim; ++d) c.domain.min[d] = domain.min[d], c.domain.max[d] = domain.max[d];
+  std::map<int, std::size_t> per_phase;
+  for (std::size_t i = 0; i < m.cell_count(); ++i) ++per_phase[i < m.cell_phase.size() ? m.cell_phase[i] : 0];
+  c.cells_per_phase.assign(per_phase.begin(), per_phase.end());
+  const double bound = options.bound > 0 ? options.bound : default_bound(Dim);
+  c.aspect = aspect_statistics<Dim>(m, bound, options.worst_count);
+  c.conformity = check_conformity<Dim>(m, domain, options.expected_measure, options.allow_inner_boundary,
+                                       options.measure_tolerance);
+  if (options.expected_measure < 0) c.notes.push_back("total measure not checked (no expected measure)");
+  return c;
+}
+
+template Certificate certify<2>(const mesh::SimplexMesh<2>&, const Box<2>&, const CertifyOptions&);
+template Certificate certify<3>(const mesh::SimplexMesh<3>&, const Box<3>&, const CertifyOptions&);
+
+// ---------------------------------------------------------------------------------------
+
+std::string certificate_json(const Certificate& c) {
+  Json j;
+  j["format"] = "cisamr-certificate/1";
+  j["passed"] = c.passed();
+  j["mesh"] = c.mesh_source;
+  j["scene"] = c.scene_source.empty() ? Json(nullptr) : Json(c.scene_source);
+  j["dimension"] = c.dimension;
+  j["nodes"] = c.node_count;
+  j["cells"] = c.cell_count;
+  Json phases = Json::array();
+  for (const auto& [id, n] : c.cells_per_phase) {
+    Json p;
+    p["phase"] = id;
+    for (const auto& [pid, name] : c.phase_names)
+      if (pid == id) p["name"] = name;
+    p["cells"] = n;
+    phases.push_back(p);
+  }
+  j["cells_per_phase"] = phases;
+  const int dim = c.dimension == 3 ? 3 : 2;
+  j["domain"] = {{"min", std::vector<double>(c.domain.min.begin(), c.domain.min.begin() + dim)},
+                 {"max", std::vector<double>(c.domain.max.begin(), c.domain.max.begin() + dim)},
+                 {"from", c.domain_from_scene ? "scene" : "mesh bounding box"}};
+
+  const AspectStats& a = c.aspect;
+  Json ar;
+  ar["definition"] = dim == 2 ? "l_max / (2 sqrt(3) r_in)" : "l_max / (2 sqrt(6) r_in)";
+  ar["passed"] = c.quality_ok();
+  ar["bound"] = a.bound;
+  ar["max"] = number(a.max);
+  ar["mean"] = number(a.mean);
+  ar["count"] = a.count;
+  ar["above_bound"] = a.above_bound;
+  ar[dim == 2 ? "min_angle_deg" : "min_dihedral_deg"] = number(a.min_angle_deg);
+  ar[dim == 2 ? "max_angle_deg" : "max_dihedral_deg"] = number(a.max_angle_deg);
+  ar["histogram"] = {{"bin_edges", a.bin_edges},
+                     {"counts", a.histogram},
+                     {"note", "counts[i] is [bin_edges[i], bin_edges[i+1]); the last count is >= the last edge"}};
+  Json worst = Json::array();
+  for (const auto& w : a.worst) {
+    worst.push_back({{"cell", w.cell},
+                     {"aspect_ratio", number(w.aspect_ratio)},
+                     {"centroid", std::vector<double>(w.centroid.begin(), w.centroid.begin() + dim)},
+                     {"phase", w.phase}});
+  }
+  ar["worst"] = worst;
+  j["aspect_ratio"] = ar;
+
+  const ConformityReport& r = c.conformity;
+  Json conf;
+  conf["ok"] = r.ok;
+  for (const Counter& k : conformity_counters(r)) conf[k.key] = k.value;
+  conf["measure"] = number(r.measure);
+  conf["expected_measure"] = measure_checked(r) ? number(r.expected_measure) : Json(nullptr);
+  conf["measure_error"] = measure_checked(r) ? number(r.measure_error) : Json(nullptr);
+  conf["measure_tolerance"] = r.measure_tolerance;
+  conf["examples"] = r.examples;
+  j["conformity"] = conf;
+
+  if (c.fidelity) {
+    const FidelityReport& f = *c.fidelity;
+    Json fid;
+    fid["ok"] = f.ok;
+    fid["tolerance"] = f.tolerance;
+    for (const Counter& k : fidelity_counters(f)) fid[k.key] = k.value;
+    fid["max_deviation"] = number(f.max_deviation);
+    Json per = Json::array();
+    for (std::size_t k = 0; k < f.phase_id.size(); ++k)
+      per.push_back({{"phase", f.phase_id[k]},
+                     {"name", f.phase_name[k]},
+                     {"void", bool(f.phase_is_void[k])},
+                     {"measure", number(f.phase_measure[k])},
+                     {"exact_measure", number(f.exact_phase_measure[k])},
+                     {"relative_error", number(f.relative_error[k])}});
+    fid["phases"] = per;
+    fid["examples"] = f.examples;
+    j["fidelity"] = fid;
+  } else {
+    j["fidelity"] = nullptr;
+  }
+  j["notes"] = c.notes;
+  return j.dump(2) + "\n";
+}
+
+// ---------------------------------------------------------------------------------------
+
+std::string certificate_html(const Certificate& c) {
+  const AspectStats& a = c.aspect;
+  const ConformityReport& r = c.conformity;
+  const bool is2d = c.dimension != 3;
+  std::ostringstream o;
+  o << "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>cisamr certificate: "
+    << html_escape(c.mesh_source) << "</title>\n<style>\n"
+    << "body{font-family:sans-serif;margin:2em;max-width:60em;color:#222}\n"
+    << "table{border-collapse:collapse;margin:0.5em 0 1.5em}\n"
+    << "td,th{border:1px solid #ccc;padding:0.25em 0.6em;text-align:left}\n"
+    << "td.n{text-align:right;font-variant-numeric:tabular-nums}\n"
+    << ".ok{background:#e3f4e3;color:#175c17}.bad{background:#f9dcdc;color:#8a1414;font-weight:bold}\n"
+    << ".verdict{display:inline-block;padding:0.3em 1em;font-size:1.4em;border-radius:4px}\n"
+    << "code,li.ex{font-family:monospace;font-size:0.9em}\n</style>\n</head>\n<body>\n";
+  o << "<h1>Mesh certificate</h1>\n<p class=\"verdict " << (c.passed() ? "ok\">PASSED" : "bad\">FAILED") << "</p>\n";
+
+  o << "<h2>Mesh</h2>\n<table>\n";
+  o << "<tr><th>mesh file</th><td><code>" << html_escape(c.mesh_source) << "</code></td></tr>\n";
+  o << "<tr><th>scene</th><td>"
+    << (c.scene_source.empty() ? "none (domain = bounding box of the mesh)" : "<code>" + html_escape(c.scene_source) + "</code>")
+    << "</td></tr>\n";
+  o << "<tr><th>dimension</th><td>" << c.dimension << "D (" << (is2d ? "triangles" : "tetrahedra") << ")</td></tr>\n";
+  o << "<tr><th>nodes</th><td class=\"n\">" << c.node_count << "</td></tr>\n";
+  o << "<tr><th>cells</th><td class=\"n\">" << c.cell_count << "</td></tr>\n";
+  for (const auto& [id, n] : c.cells_per_phase)
+    o << "<tr><th>cells of phase " << html_escape(phase_label(c, id)) << "</th><td class=\"n\">" << n << "</td></tr>\n";
+  o << "</table>\n";
+
+  o << "<h2>Aspect ratio</h2>\n<p>Verdict definition: <code>"
+    << (is2d ? "l_max / (2&#8730;3 r_in)" : "l_max / (2&#8730;6 r_in)")
+    << "</code>, 1 for the " << (is2d ? "equilateral triangle" : "regular tetrahedron") << ".</p>\n<table>\n";
+  o << "<tr><th>bound</th><td class=\"n\">" << num(a.bound) << "</td><td></td></tr>\n";
+  o << "<tr><th>maximum</th><td class=\"n\">" << num(a.max) << "</td>" << status_cell(c.quality_ok()) << "</tr>\n";
+  o << "<tr><th>mean</th><td class=\"n\">" << num(a.mean) << "</td><td></td></tr>\n";
+  o << "<tr><th>cells above the bound</th><td class=\"n\">" << a.above_bound << "</td>" << status_cell(a.above_bound == 0)
+    << "</tr>\n";
+  o << "<tr><th>" << (is2d ? "smallest angle" : "smallest dihedral angle") << "</th><td class=\"n\">"
+    << num(a.min_angle_deg, 4) << "&#176;</td><td></td></tr>\n";
+  o << "<tr><th>" << (is2d ? "largest angle" : "largest dihedral angle") << "</th><td class=\"n\">"
+    << num(a.max_angle_deg, 4) << "&#176;</td><td></td></tr>\n</table>\n";
+  o << histogram_svg(a);
+
+  o << "<h3>Worst elements</h3>\n<table>\n<tr><th>#</th><th>cell</th><th>aspect ratio</th><th>centroid</th><th>phase</th></tr>\n";
+  for (std::size_t i = 0; i < a.worst.size(); ++i) {
+    const auto& w = a.worst[i];
+    o << "<tr><td class=\"n\">" << i + 1 << "</td><td class=\"n\">" << w.cell << "</td><td class=\"n"
+      << (w.aspect_ratio > a.bound ? " bad" : "") << "\">" << num(w.aspect_ratio) << "</td><td><code>(" << num(w.centroid[0], 8)
+      << ", " << num(w.centroid[1], 8);
+    if (!is2d) o << ", " << num(w.centroid[2], 8);
+    o << ")</code></td><td>" << html_escape(phase_label(c, w.phase)) << "</td></tr>\n";
+  }
+  o << "</table>\n";
+
+  o << "<h2>Conformity</h2>\n<table>\n<tr><th>check</th><th>count</th><th></th></tr>\n";
+  for (const Counter& k : conformity_counters(r))
+    o << "<tr><td>" << k.label << "</td><td class=\"n\">" << k.value << "</td>"
+      << (k.is_error ? status_cell(k.value == 0) : std::string("<td></td>")) << "</tr>\n";
+  o << "<tr><td>total measure</td><td class=\"n\">" << num(r.measure, 12) << "</td><td></td></tr>\n";
+  if (measure_checked(r)) {
+    o << "<tr><td>expected measure</td><td class=\"n\">" << num(r.expected_measure, 12) << "</td><td></td></tr>\n";
+    o << "<tr><td>relative measure error (tolerance " << num(r.measure_tolerance) << ")</td><td class=\"n\">"
+      << num(r.measure_error, 3) << "</td>" << status_cell(measure_ok(r)) << "</tr>\n";
+  }
+  o << "</table>\n";
+  if (!r.examples.empty()) {
+    o << "<ul>\n";
+    for (const auto& e : r.examples) o << "<li class=\"ex\">" << html_escape(e) << "</li>\n";
+    o << "</ul>\n";
+  }
+
+  o << "<h2>Phase fidelity</h2>\n";
+  if (c.fidelity) {
+    const FidelityReport& f = *c.fidelity;
+    o << "<p>Tolerance " << num(f.tolerance, 3) << "; largest deviation found " << num(f.max_deviation, 3) << ".</p>\n";
+    o << "<table>\n<tr><th>check</th><th>count</th><th></th></tr>\n";
+    for (const Counter& k : fidelity_counters(f))
+      o << "<tr><td>" << k.label << "</td><td class=\"n\">" << k.value << "</td>" << status_cell(k.value == 0) << "</tr>\n";
+    o << "</table>\n<table>\n<tr><th>phase</th><th>meshed measure</th><th>exact measure</th><th>relative error</th></tr>\n";
+    for (std::size_t k = 0; k < f.phase_id.size(); ++k) {
+      o << "<tr><td>" << f.phase_id[k] << (f.phase_name[k].empty() ? "" : " (" + html_escape(f.phase_name[k]) + ")")
+        << "</td>";
+      if (f.phase_is_void[k])
+        o << "<td>void (not meshed)</td><td class=\"n\">" << num(f.exact_phase_measure[k], 10) << "</td><td></td></tr>\n";
+      else
+        o << "<td class=\"n\">" << num(f.phase_measure[k], 10) << "</td><td class=\"n\">" << num(f.exact_phase_measure[k], 10)
+          << "</td><td class=\"n\">" << num(f.relative_error[k], 3) << "</td></tr>\n";
+    }
+    o << "</table>\n";
+    if (!f.examples.empty()) {
+      o << "<ul>\n";
+      for (const auto& e : f.examples) o << "<li class=\"ex\">" << html_escape(e) << "</li>\n";
+      o << "</ul>\n";
+    }
+  } else {
+    o << "<p>Not checked.</p>\n";
+  }
+  if (!c.notes.empty()) {
+    o << "<h2>Notes</h2>\n<ul>\n";
+    for (const auto& n : c.notes) o << "<li>" << html_escape(n) << "</li>\n";
+    o << "</ul>\n";
+  }
+  o << "</body>\n</html>\n";
+  return o.str();
+}
+
+// ---------------------------------------------------------------------------------------
+
+std::string certificate_summary(const Certificate& c) {
+  const AspectStats& a = c.aspect;
+  const ConformityReport& r = c.conformity;
+  std::ostringstream o;
+  o << "mesh: " << (c.mesh_source.empty() ? "(in memory)" : c.mesh_source) << ": " << c.dimension << "D, " << c.node_count
+    << " nodes, " << c.cell_count << (c.dimension == 2 ? " triangles" : " tetrahedra") << "\n";
+  o << "aspect ratio: max " << num(a.max, 5) << ", mean " << num(a.mean, 5) << ", " << a.above_bound
+    << " above the bound " << num(a.bound) << "\n";
+  o << (c.dimension == 2 ? "angles: " : "dihedral angles: ") << num(a.min_angle_deg, 4) << " to "
+    << num(a.max_angle_deg, 4) << " degrees\n";
+  o << "conformity: ";
+  if (r.ok) {
+    o << "ok";
+  } else {
+    std::string problems;
+    for (const Counter& k : conformity_counters(r))
+      if (k.is_error && k.value > 0) problems += (problems.empty() ? "" : ", ") + std::to_string(k.value) + " " + k.label;
+    if (!measure_ok(r)) problems += (problems.empty() ? "" : ", ") + std::string("measure off by ") + num(r.measure_error, 3);
+    o << "FAILED (" << problems << ")";
+  }
+  if (measure_checked(r)) o << "; measure " << num(r.measure, 10) << " (relative error " << num(r.measure_error, 3) << ")";
+  o << "\n";
+  if (c.fidelity) {
+    const FidelityReport& f = *c.fidelity;
+    o << "fidelity: ";
+    if (f.ok) {
+      o << "ok (largest deviation " << num(f.max_deviation, 3) << ", tolerance " << num(f.tolerance, 3) << ")";
+    } else {
+      std::string problems;
+      for (const Counter& k : fidelity_counters(f))
+        if (k.value > 0) problems += (problems.empty() ? "" : ", ") + std::to_string(k.value) + " " + k.label;
+      o << "FAILED (" << problems << "; largest deviation " << num(f.max_deviation, 3) << ")";
+    }
+    o << "\n";
+  }
+  for (const auto& n : c.notes) o << "note: " << n << "\n";
+  o << "certificate: " << (c.passed() ? "PASSED" : "FAILED") << "\n";
+  return o.str();
+}
+
+}  // namespace cisamr::quality

@@ -1,0 +1,212 @@
+// Partitioning: exact tiling on the lattice, load conservation, symmetric neighbours,
+// better balance than a uniform grid on a clustered scene, the paper's Fig. 3 merge.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <nlohmann/json.hpp>
+
+#include "core/error.hpp"
+#include "pack/pack.hpp"
+#include "partition/load_field.hpp"
+#include "partition/partition.hpp"
+
+using namespace cisamr;
+using namespace cisamr::geometry;
+
+namespace {
+
+SceneDesc base_scene(int dim, double extent, double h) {
+  SceneDesc s;
+  s.dimension = dim;
+  s.domain_min = {0, 0, 0};
+  s.domain_max = {extent, extent, dim == 3 ? extent : 0};
+  s.h = h;
+  s.levels = 1;
+  s.phases = {{1, "matrix", false}, {2, "inclusion", false}};
+  return s;
+}
+
+// A clustered 2D scene from the packer: dense cluster in one corner, sparse elsewhere.
+SceneDesc clustered_scene() {
+  const auto spec = pack::parse_pack_spec(R"({"format": "cisamr-pack/1", "dimension": 2, "seed": 3,
+      "domain": {"min": [0, 0], "max": [200, 200]}, "mesh": {"h": 1, "levels": 2},
+      "populations": [
+        {"shape": "circle", "count": 250, "size": {"law": "uniform", "min": 1, "max": 2.5}, "min_gap": 0.5,
+         "region": {"min": [0, 0], "max": [70, 90]}},
+        {"shape": "ellipse", "count": 300, "size": {"law": "uniform", "min": 1, "max": 2.5}, "min_gap": 0.5,
+         "aspect": {"law": "uniform", "min": 1, "max": 2}}]})", "clustered.json");
+  return pack::pack(spec).scene;
+}
+
+void expect_valid_tiling(const partition::Partition& p, int n) {
+  ASSERT_EQ(static_cast<int>(p.parts.size()), n);
+  const int dim = p.dimension;
+  double volume = 0, load = 0;
+  for (const auto& a : p.parts) {
+    double v = 1;
+    for (int d = 0; d < dim; ++d) {
+      EXPECT_LT(a.lattice_min[d], a.lattice_max[d]);
+      EXPECT_GE(a.lattice_min[d], 0);
+      EXPECT_LE(a.lattice_max[d], p.cells[d]);
+      EXPECT_EQ(a.box.min[d], p.domain.min[d] + a.lattice_min[d] * p.h);  // on the lattice
+      EXPECT_EQ(a.box.max[d], p.domain.min[d] + a.lattice_max[d] * p.h);
+      v *= static_cast<double>(a.lattice_max[d] - a.lattice_min[d]);
+    }
+    volume += v;
+    load += a.load;
+  }
+  double cells = 1;
+  for (int d = 0; d < dim; ++d) cells *= static_cast<double>(p.cells[d]);
+  EXPECT_EQ(volume, cells);  // with pairwise disjointness: the union is the domain
+  for (std::size_t i = 0; i < p.parts.size(); ++i)
+    for (std::size_t j = i + 1; j < p.parts.size(); ++j) {
+      bool disjoint = false;
+      for (int d = 0; d < dim; ++d)
+        disjoint = disjoint || p.parts[i].lattice_max[d] <= p.parts[j].lattice_min[d] ||
+                   p.parts[j].lattice_max[d] <= p.parts[i].lattice_min[d];
+      EXPECT_TRUE(disjoint) << i << " " << j;
+    }
+  EXPECT_NEAR(load, p.total_load, 1e-9 * std::max(1.0, p.total_load));
+  // Neighbours are symmetric, with the same face seen from both sides.
+  for (const auto& a : p.parts)
+    for (const auto& nb : a.neighbours) {
+      bool found = false;
+      for (const auto& back : p.parts[nb.part].neighbours)
+        if (back.part == a.id && back.axis == nb.axis && back.side == -nb.side && back.periodic == nb.periodic) {
+          found = true;
+          for (int d = 0; d < dim; ++d) {
+            if (d == nb.axis) continue;
+            EXPECT_EQ(back.face.min[d], nb.face.min[d]);
+            EXPECT_EQ(back.face.max[d], nb.face.max[d]);
+          }
+        }
+      EXPECT_TRUE(found) << a.id << " -> " << nb.part;
+    }
+}
+
+}  // namespace
+
+TEST(PartitionLoad, CirclesGiveExactPerimeters) {
+  SceneDesc s = base_scene(2, 20, 1);
+  s.inclusions.push_back({Circle{{5.3, 6.1}, 2.7}, 2, 2});
+  s.inclusions.push_back({Circle{{14.0, 14.0}, 3.0}, 2, 3});
+  const double expected = 2 * 2 * M_PI * 2.7 + 3 * 2 * M_PI * 3.0;  // R^1 · perimeter
+  EXPECT_NEAR(partition::total_load(s), expected, 1e-9 * expected);
+  const auto p = partition::partition_domain(s, 4);
+  expect_valid_tiling(p, 4);
+  // The arcs inside one quadrant: the circle at (14,14) r=3 lies in the top-right quarter.
+  partition::PartitionOptions o;
+  const auto u = partition::uniform_grid_partition(s, 4, o);
+  EXPECT_NEAR(u.parts[3].load, 3 * 2 * M_PI * 3.0, 1e-9);
+}
+
+TEST(PartitionLoad, ClippedOutsideAndWrappedWhenPeriodic) {
+  SceneDesc s = base_scene(2, 20, 1);
+  s.inclusions.push_back({Circle{{0, 10}, 2}, 2, 1});  // half outside the domain
+  EXPECT_NEAR(partition::total_load(s), M_PI * 2, 1e-9);
+  s.periodic = true;
+  EXPECT_NEAR(partition::total_load(s), 2 * M_PI * 2, 1e-9);
+}
+
+TEST(PartitionLoad, EllipsePerimeterAgm) {
+  EXPECT_NEAR(partition::ellipse_perimeter(1, 1), 2 * M_PI, 1e-14);
+  EXPECT_NEAR(partition::ellipse_perimeter(2, 1), 9.688448220547675, 1e-12);
+  EXPECT_NEAR(partition::ellipse_perimeter(1, 2), 9.688448220547675, 1e-12);
+}
+
+TEST(Partition, TilesTheDomainOnTheLattice2D) {
+  const SceneDesc s = clustered_scene();
+  for (int n : {1, 3, 7, 12, 20}) {
+    SCOPED_TRACE(n);
+    expect_valid_tiling(partition::partition_domain(s, n), n);
+    partition::PartitionOptions merge_only;
+    merge_only.method = partition::PartitionOptions::Method::merge;
+    expect_valid_tiling(partition::partition_domain(s, n, merge_only), n);
+    expect_valid_tiling(partition::uniform_grid_partition(s, n), n);
+  }
+}
+
+TEST(Partition, BeatsTheUniformGridOnAClusteredScene) {
+  const SceneDesc s = clustered_scene();
+  for (int n : {4, 9, 16}) {
+    const auto ours = partition::partition_domain(s, n);
+    const auto grid = partition::uniform_grid_partition(s, n);
+    EXPECT_LT(ours.max_load(), grid.max_load()) << n;
+    EXPECT_LT(ours.imbalance(), 1.15) << n;
+  }
+}
+
+TEST(Partition, MergesTheTwoLightRegionsFirst) {  // the paper's Fig. 3b: 2×2 → 3
+  SceneDesc s = base_scene(2, 40, 1);
+  s.inclusions.push_back({Circle{{10, 10}, 4}, 2, 1});
+  s.inclusions.push_back({Circle{{10, 30}, 4}, 2, 1});
+  s.inclusions.push_back({Circle{{30, 10}, 2}, 2, 1});
+  s.inclusions.push_back({Circle{{30, 30}, 2}, 2, 1});
+  partition::PartitionOptions o;
+  o.method = partition::PartitionOptions::Method::merge;
+  o.oversubscription = 1;
+  o.extra_depths = 0;
+  o.rebalance = false;
+  const auto p = partition::partition_domain(s, 3, o);
+  expect_valid_tiling(p, 3);
+  bool right_half = false;
+  for (const auto& a : p.parts)
+    right_half = right_half || (a.lattice_min[0] == 20 && a.lattice_max[0] == 40 && a.lattice_min[1] == 0 &&
+                                a.lattice_max[1] == 40);
+  EXPECT_TRUE(right_half);
+  // Fig. 3c: 3 levels on the right particles make the left pair the lighter one.
+  for (int k = 2; k < 4; ++k) s.inclusions[k].levels = 5;
+  const auto q = partition::partition_domain(s, 3, o);
+  bool left_half = false;
+  for (const auto& a : q.parts)
+    left_half = left_half || (a.lattice_min[0] == 0 && a.lattice_max[0] == 20 && a.lattice_max[1] == 40 &&
+                              a.lattice_min[1] == 0);
+  EXPECT_TRUE(left_half);
+}
+
+TEST(Partition, SpheresIn3DAndPeriodicNeighbours) {
+  const auto spec = pack::parse_pack_spec(R"({"format": "cisamr-pack/1", "dimension": 3, "seed": 2,
+      "domain": {"min": [0, 0, 0], "max": [40, 40, 40], "periodic": true}, "mesh": {"h": 1, "levels": 2},
+      "populations": [{"shape": "sphere", "count": 150, "size": {"law": "uniform", "min": 1.5, "max": 3}, "min_gap": 0.5},
+                      {"shape": "ellipsoid", "count": 30, "size": 2, "aspect": 2, "min_gap": 0.5}]})", "s.json");
+  const SceneDesc s = pack::pack(spec).scene;
+  double area = 0;
+  for (const auto& inc : s.inclusions)
+    if (auto* sp = std::get_if<Sphere>(&inc.shape)) area += 4 * M_PI * sp->radius * sp->radius;
+  const double total = partition::total_load(s);
+  EXPECT_GT(total, area * std::pow(2.0, 1.5));  // spheres plus the ellipsoids, M = 1.5
+  const auto p = partition::partition_domain(s, 12);
+  expect_valid_tiling(p, 12);
+  int periodic = 0;
+  for (const auto& a : p.parts)
+    for (const auto& nb : a.neighbours) periodic += nb.periodic;
+  EXPECT_GT(periodic, 0);
+  EXPECT_LE(p.max_load(), partition::uniform_grid_partition(s, 12).max_load());
+}
+
+TEST(Partition, JsonIsCompleteAndDeterministic) {
+  const SceneDesc s = clustered_scene();
+  const auto a = partition::partition_domain(s, 6), b = partition::partition_domain(s, 6);
+  const std::string ja = partition::to_json(a, "scene.json");
+  EXPECT_EQ(ja, partition::to_json(b, "scene.json"));
+  const auto doc = nlohmann::json::parse(ja);
+  EXPECT_EQ(doc["format"], "cisamr-partition/1");
+  ASSERT_EQ(doc["parts"].size(), 6u);
+  std::size_t listed = 0;
+  for (const auto& part : doc["parts"]) {
+    EXPECT_EQ(part["min"].size(), 2u);
+    EXPECT_FALSE(part["neighbours"].empty());
+    listed += part["inclusions"].size();
+  }
+  EXPECT_GE(listed, s.inclusions.size());  // every inclusion is listed by a part that meets it
+  const std::string svg = partition::to_svg(a, s);
+  EXPECT_NE(svg.find("<svg"), std::string::npos);
+  EXPECT_NE(svg.find("<circle"), std::string::npos);
+}
+
+TEST(Partition, BadCountsAreInputErrors) {
+  SceneDesc s = base_scene(2, 4, 1);
+  EXPECT_THROW(partition::partition_domain(s, 0), InputError);
+  EXPECT_THROW(partition::partition_domain(s, 17), InputError);
+  expect_valid_tiling(partition::partition_domain(s, 16), 16);
+}

@@ -1,0 +1,181 @@
+// Aspect ratio reference values, histogram, worst list, angles.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numeric>
+
+#include "mesh_builders.hpp"
+#include "quality/quality.hpp"
+
+namespace cisamr::quality {
+namespace {
+using namespace testing;
+
+mesh::Mesh2 single_triangle(Vec2 a, Vec2 b, Vec2 c) {
+  mesh::Mesh2 m;
+  add_node(m, a[0], a[1]);
+  add_node(m, b[0], b[1]);
+  add_node(m, c[0], c[1]);
+  add_cell<2>(m, {0, 1, 2}, 7);
+  return m;
+}
+mesh::Mesh3 single_tet(Vec3 a, Vec3 b, Vec3 c, Vec3 d) {
+  mesh::Mesh3 m;
+  for (const Vec3& p : {a, b, c, d}) add_node(m, p[0], p[1], p[2]);
+  add_cell<3>(m, {0, 1, 2, 3});
+  return m;
+}
+
+// Independent form of the triangle aspect ratio: l_max · perimeter / (4√3 · area).
+double triangle_ar(Vec2 a, Vec2 b, Vec2 c) {
+  const double l0 = std::hypot(b[0] - a[0], b[1] - a[1]), l1 = std::hypot(c[0] - b[0], c[1] - b[1]),
+               l2 = std::hypot(a[0] - c[0], a[1] - c[1]);
+  const double area = 0.5 * std::abs((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]));
+  return std::max({l0, l1, l2}) * (l0 + l1 + l2) / (4 * std::sqrt(3.0) * area);
+}
+
+std::size_t sum(const std::vector<std::size_t>& v) { return std::accumulate(v.begin(), v.end(), std::size_t(0)); }
+
+TEST(AspectRatio, EquilateralTriangleIsOne) {
+  const auto s = aspect_statistics<2>(single_triangle({0, 0}, {2, 0}, {1, std::sqrt(3.0)}), 3.0);
+  EXPECT_NEAR(s.max, 1.0, 1e-12);
+  EXPECT_NEAR(s.min_angle_deg, 60.0, 1e-9);
+  EXPECT_NEAR(s.max_angle_deg, 60.0, 1e-9);
+  EXPECT_EQ(s.histogram[0], 1u);  // [1.0, 1.1), round-off below 1 included
+}
+
+// l_max / (2√3 r_in) with l_max = √2, r_in = 1 / (2 + √2) gives (1 + √2)/√3 = 1.394.
+// The 1.207 quoted in reference/cisamr-algorithm.md §7 is Verdict's *radius ratio*
+// R / (2 r_in) = (√2/2)(2 + √2)/2 of this triangle, not its aspect ratio (see README.md).
+TEST(AspectRatio, HalfSquareRightTriangle) {
+  const auto s = aspect_statistics<2>(single_triangle({0, 0}, {1, 0}, {0, 1}), 3.0);
+  EXPECT_NEAR(s.max, (1 + std::sqrt(2.0)) / std::sqrt(3.0), 1e-12);
+  EXPECT_NEAR(s.max, 1.394, 5e-4);
+  EXPECT_NEAR(s.max, triangle_ar({0, 0}, {1, 0}, {0, 1}), 1e-12);
+  const double radius_ratio = (std::sqrt(2.0) / 2) / (2 * (1 / (2 + std::sqrt(2.0))));
+  EXPECT_NEAR(radius_ratio, 1.207, 5e-4);
+  EXPECT_NEAR(s.min_angle_deg, 45.0, 1e-9);
+  EXPECT_NEAR(s.max_angle_deg, 90.0, 1e-9);
+  EXPECT_EQ(s.histogram[3], 1u);  // [1.3, 1.4)
+}
+
+TEST(AspectRatio, TrirectangularTet) {
+  const auto s = aspect_statistics<3>(single_tet({0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}), 5.0);
+  EXPECT_NEAR(s.max, (1 + std::sqrt(3.0)) / 2, 1e-12);  // 1.366
+  EXPECT_NEAR(s.max, 1.366, 5e-4);
+  EXPECT_NEAR(s.min_angle_deg, std::acos(1 / std::sqrt(3.0)) * 180 / M_PI, 1e-9);  // 54.74°
+  EXPECT_NEAR(s.max_angle_deg, 90.0, 1e-9);
+}
+
+TEST(AspectRatio, RegularTetIsOne) {
+  const auto s = aspect_statistics<3>(single_tet({1, 1, 1}, {1, -1, -1}, {-1, 1, -1}, {-1, -1, 1}), 5.0);
+  EXPECT_NEAR(s.max, 1.0, 1e-12);
+  const double dihedral = std::acos(1.0 / 3.0) * 180 / M_PI;  // 70.53°
+  EXPECT_NEAR(s.min_angle_deg, dihedral, 1e-9);
+  EXPECT_NEAR(s.max_angle_deg, dihedral, 1e-9);
+}
+
+TEST(AspectRatio, OrientationDoesNotMatter) {
+  const auto a = aspect_statistics<2>(single_triangle({0, 0}, {3, 0}, {1, 1}), 3.0);
+  const auto b = aspect_statistics<2>(single_triangle({0, 0}, {1, 1}, {3, 0}), 3.0);
+  EXPECT_DOUBLE_EQ(a.max, b.max);
+  EXPECT_NEAR(a.max, triangle_ar({0, 0}, {3, 0}, {1, 1}), 1e-12);
+}
+
+// 3×2 squares split into right triangles (AR 1.394), then one stretched triangle added
+// on top whose aspect ratio we compute independently.
+TEST(AspectStatistics, HistogramMaxAndWorstOnSmallMesh) {
+  mesh::Mesh2 m = structured_triangles(3, 2);
+  const LocalId far = add_node(m, 7.2, 1.5);
+  add_cell<2>(m, {7, far, 11}, 2);  // nodes (3,1), (7.2,1.5), (3,2)
+  const double stretched = triangle_ar({3, 1}, {7.2, 1.5}, {3, 2});
+  ASSERT_GT(stretched, 2.5);
+  ASSERT_LT(stretched, 3.0);
+
+  const auto s = aspect_statistics<2>(m, 3.0, 4);
+  EXPECT_EQ(s.count, 13u);
+  EXPECT_NEAR(s.max, stretched, 1e-12);
+  const double right = (1 + std::sqrt(2.0)) / std::sqrt(3.0);
+  EXPECT_NEAR(s.mean, (12 * right + stretched) / 13, 1e-12);
+  EXPECT_EQ(s.above_bound, 0u);
+  // Edges 1.0, 1.1, ..., 3.1: 21 regular bins + overflow.
+  ASSERT_EQ(s.bin_edges.size(), 22u);
+  EXPECT_DOUBLE_EQ(s.bin_edges.front(), 1.0);
+  EXPECT_DOUBLE_EQ(s.bin_edges[5], 1.5);
+  EXPECT_GT(s.bin_edges.back(), 3.0);
+  ASSERT_EQ(s.histogram.size(), s.bin_edges.size());
+  EXPECT_EQ(sum(s.histogram), 13u);
+  EXPECT_EQ(s.histogram[3], 12u);
+  const auto bin = static_cast<std::size_t>((stretched - 1.0) * 10);
+  EXPECT_EQ(s.histogram[bin], 1u);
+  EXPECT_EQ(s.histogram.back(), 0u);  // overflow empty
+
+  ASSERT_EQ(s.worst.size(), 4u);
+  EXPECT_EQ(s.worst[0].cell, 12u);
+  EXPECT_EQ(s.worst[0].phase, 2);
+  EXPECT_NEAR(s.worst[0].centroid[0], 4.4, 1e-12);
+  EXPECT_NEAR(s.worst[0].centroid[1], 1.5, 1e-12);
+  EXPECT_EQ(s.worst[0].centroid[2], 0.0);
+  for (int i = 1; i < 4; ++i) {
+    EXPECT_NEAR(s.worst[i].aspect_ratio, right, 1e-12);
+    EXPECT_LT(s.worst[i].cell, 12u);
+  }
+
+  const auto tight = aspect_statistics<2>(m, 2.5, 0);
+  EXPECT_EQ(tight.above_bound, 1u);
+  EXPECT_TRUE(tight.worst.empty());
+  EXPECT_GT(tight.bin_edges.back(), stretched);
+}
+
+TEST(AspectStatistics, WorstTiesGoToSmallerCellIds) {
+  mesh::Mesh2 m;
+  for (int k = 0; k < 3; ++k) {  // the same triangle translated by integers: identical ARs
+    const LocalId a = add_node(m, 4 * k, 0), b = add_node(m, 4 * k + 3, 0), c = add_node(m, 4 * k + 1, 1);
+    add_cell<2>(m, {a, b, c});
+  }
+  const auto s = aspect_statistics<2>(m, 3.0, 2);
+  ASSERT_EQ(s.worst.size(), 2u);
+  EXPECT_EQ(s.worst[0].cell, 0u);
+  EXPECT_EQ(s.worst[1].cell, 1u);
+  EXPECT_EQ(s.worst[0].aspect_ratio, s.worst[1].aspect_ratio);
+}
+
+TEST(AspectStatistics, DegenerateAndHugeGoToOverflow) {
+  mesh::Mesh2 m = structured_triangles(1, 1);
+  const LocalId a = add_node(m, 0, 2), b = add_node(m, 1, 2), c = add_node(m, 2, 2);
+  add_cell<2>(m, {a, b, c});                      // collinear: infinite AR
+  const LocalId d = add_node(m, 0, 3), e = add_node(m, 1e3, 3), f = add_node(m, 500, 3.0 + 1e-3);
+  add_cell<2>(m, {d, e, f});                      // AR ~ 1e8
+  const auto s = aspect_statistics<2>(m, 3.0);
+  EXPECT_TRUE(std::isinf(s.max));
+  EXPECT_TRUE(std::isfinite(s.mean));
+  EXPECT_EQ(s.above_bound, 2u);
+  EXPECT_DOUBLE_EQ(s.bin_edges.back(), kHistogramMaxEdge);
+  EXPECT_EQ(s.histogram.back(), 2u);
+  EXPECT_EQ(sum(s.histogram), 4u);
+  EXPECT_TRUE(std::isinf(s.worst[0].aspect_ratio));
+  EXPECT_EQ(s.worst[0].cell, 2u);
+  EXPECT_NEAR(s.min_angle_deg, 0.0, 1e-3);
+  EXPECT_NEAR(s.max_angle_deg, 180.0, 1e-3);
+}
+
+TEST(AspectStatistics, EmptyMesh) {
+  const auto s = aspect_statistics<3>(mesh::Mesh3{}, 5.0);
+  EXPECT_EQ(s.count, 0u);
+  EXPECT_EQ(s.max, 0.0);
+  EXPECT_EQ(sum(s.histogram), 0u);
+  EXPECT_GT(s.bin_edges.back(), 5.0);
+}
+
+TEST(AspectStatistics, StructuredTetMesh) {
+  const auto s = aspect_statistics<3>(structured_tets(2, 2, 2), 5.0);
+  EXPECT_EQ(s.count, 40u);
+  // Corner tets are trirectangular (1.366), the central ones regular (1).
+  EXPECT_NEAR(s.max, (1 + std::sqrt(3.0)) / 2, 1e-12);
+  EXPECT_EQ(s.histogram[0], 8u);
+  EXPECT_EQ(s.histogram[3], 32u);
+  EXPECT_NEAR(s.max_angle_deg, 90.0, 1e-9);
+}
+
+}  // namespace
+}  // namespace cisamr::quality

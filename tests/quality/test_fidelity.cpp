@@ -1,0 +1,178 @@
+// Phase fidelity against the 2D oracle, and certification against a scene.
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include "geometry/oracle2.hpp"
+#include "geometry/scene.hpp"
+#include "mesh_builders.hpp"
+#include "quality/certificate.hpp"
+#include "quality/quality.hpp"
+
+namespace cisamr::quality {
+namespace {
+using namespace testing;
+
+// [0,1]² with the square [0.25,0.75]² as phase 2 (a void when asked).
+geometry::SceneDesc square_scene(bool inclusion_is_void) {
+  geometry::SceneDesc s;
+  s.source = "square-scene.json";
+  s.dimension = 2;
+  s.domain_min = {0, 0, 0};
+  s.domain_max = {1, 1, 0};
+  s.h = 0.25;
+  s.phases = {{1, "matrix", false}, {2, inclusion_is_void ? "pore" : "square", inclusion_is_void}};
+  s.matrix_phase = 1;
+  geometry::Inclusion inc;
+  inc.shape = geometry::Polygon{{{0.25, 0.25}, {0.75, 0.25}, {0.75, 0.75}, {0.25, 0.75}}};
+  inc.phase = 2;
+  s.inclusions.push_back(inc);
+  return s;
+}
+
+bool in_square(const Vec2& p) { return p[0] > 0.25 && p[0] < 0.75 && p[1] > 0.25 && p[1] < 0.75; }
+
+Vec2 centroid(const mesh::Mesh2& m, std::size_t c) {
+  Vec2 g{0, 0};
+  for (int k = 0; k < 3; ++k)
+    for (int d = 0; d < 2; ++d) g[d] += m.point(m.cell(c)[k])[d] / 3;
+  return g;
+}
+
+// 4×4 grid of h = 0.25, phase 2 where the centroid is in the square.
+mesh::Mesh2 square_mesh() {
+  mesh::Mesh2 m = structured_triangles(4, 4, 0.25);
+  for (std::size_t c = 0; c < m.cell_count(); ++c) m.cell_phase[c] = in_square(centroid(m, c)) ? 2 : 1;
+  return m;
+}
+
+// Keeps the cells `keep` says yes to, drops the nodes no kept cell uses.
+template <class Keep>
+mesh::Mesh2 filtered(const mesh::Mesh2& m, Keep keep) {
+  mesh::Mesh2 out;
+  std::vector<LocalId> new_id(m.node_count(), -1);
+  for (std::size_t c = 0; c < m.cell_count(); ++c) {
+    if (!keep(c)) continue;
+    std::array<LocalId, 3> t;
+    for (int k = 0; k < 3; ++k) {
+      LocalId& n = new_id[m.cell(c)[k]];
+      if (n < 0) {
+        const Vec2 p = m.point(m.cell(c)[k]);
+        n = add_node(out, p[0], p[1]);
+      }
+      t[k] = n;
+    }
+    add_cell<2>(out, t, m.cell_phase[c]);
+  }
+  return out;
+}
+
+TEST(Fidelity, ConformingSquareInclusionPasses) {
+  const geometry::Oracle2 oracle(square_scene(false));
+  const mesh::Mesh2 m = square_mesh();
+  const auto f = check_fidelity(m, oracle, 1e-9);
+  EXPECT_TRUE(f.ok);
+  EXPECT_EQ(f.nodes_off_phase, 0u);
+  EXPECT_EQ(f.interface_nodes_off_interface, 0u);
+  EXPECT_EQ(f.boundary_nodes_off_void, 0u);
+  EXPECT_EQ(f.max_deviation, 0.0);
+  ASSERT_EQ(f.phase_measure.size(), 2u);
+  EXPECT_NEAR(f.phase_measure[0], 0.75, 1e-14);
+  EXPECT_NEAR(f.phase_measure[1], 0.25, 1e-14);
+  EXPECT_NEAR(f.exact_phase_measure[1], 0.25, 1e-12);
+  EXPECT_LT(f.relative_error[0], 1e-12);
+  EXPECT_LT(f.relative_error[1], 1e-12);
+}
+
+TEST(Fidelity, CellsOfTheWrongPhaseAreCaught) {
+  const geometry::Oracle2 oracle(square_scene(false));
+  mesh::Mesh2 m = square_mesh();
+  m.cell_phase[0] = m.cell_phase[1] = 2;  // the corner square [0,0.25]²
+  const auto f = check_fidelity(m, oracle, 1e-9);
+  EXPECT_FALSE(f.ok);
+  EXPECT_EQ(f.nodes_off_phase, 1u);                // (0,0): only phase-2 cells around it
+  EXPECT_EQ(f.interface_nodes_off_interface, 2u);  // (0.25,0) and (0,0.25)
+  EXPECT_NEAR(f.max_deviation, 0.25 * std::sqrt(2.0), 1e-12);
+  EXPECT_NEAR(f.relative_error[1], 0.25, 1e-12);  // 0.3125 meshed for 0.25
+  EXPECT_FALSE(f.examples.empty());
+}
+
+TEST(Fidelity, InterfaceNodeOffByMoreThanTheTolerance) {
+  const geometry::Oracle2 oracle(square_scene(false));
+  mesh::Mesh2 m = square_mesh();
+  const std::size_t node = 2 * 5 + 1;  // (0.25, 0.5), on the square's left side
+  ASSERT_EQ(m.point(LocalId(node))[0], 0.25);
+  ASSERT_EQ(m.point(LocalId(node))[1], 0.5);
+  const double tol = default_fidelity_tolerance(oracle.scene());
+  EXPECT_NEAR(tol, 1e-9 * std::sqrt(2.0), 1e-20);
+
+  m.coords[2 * node] = 0.25 + 1e-12;  // within the tolerance
+  EXPECT_TRUE(check_fidelity(m, oracle, tol).ok);
+  m.coords[2 * node] = 0.25 + 1e-6;   // into the square: 1e-6 from the matrix
+  const auto f = check_fidelity(m, oracle, tol);
+  EXPECT_FALSE(f.ok);
+  EXPECT_EQ(f.interface_nodes_off_interface, 1u);
+  EXPECT_EQ(f.nodes_off_phase, 0u);
+  EXPECT_NEAR(f.max_deviation, 1e-6, 1e-12);
+}
+
+TEST(Fidelity, VoidBoundaryMustLieOnTheVoid) {
+  const geometry::Oracle2 oracle(square_scene(true));
+  const mesh::Mesh2 full = square_mesh();
+  const mesh::Mesh2 m = filtered(full, [&](std::size_t c) { return full.cell_phase[c] == 1; });
+  const auto f = check_fidelity(m, oracle, 1e-9);
+  EXPECT_TRUE(f.ok);
+  EXPECT_TRUE(f.phase_is_void[1]);
+  EXPECT_TRUE(std::isnan(f.relative_error[1]));
+  EXPECT_NEAR(f.phase_measure[0], 0.75, 1e-14);
+
+  // A hole in the matrix looks like a void boundary to the conformity check; here it is
+  // caught: (0.25, 0) and (0, 0.25) are far from the void.
+  const mesh::Mesh2 holed = filtered(full, [&](std::size_t c) { return full.cell_phase[c] == 1 && c > 1; });
+  const auto h = check_fidelity(holed, oracle, 1e-9);
+  EXPECT_FALSE(h.ok);
+  EXPECT_EQ(h.boundary_nodes_off_void, 2u);
+  EXPECT_TRUE(check_conformity<2>(holed, Box2{{0, 0}, {1, 1}}, 0.75, true, 0.1).ok);
+}
+
+TEST(Fidelity, UnknownPhaseIdIsReported) {
+  const geometry::Oracle2 oracle(square_scene(false));
+  mesh::Mesh2 m = square_mesh();
+  m.cell_phase[5] = 9;
+  const auto f = check_fidelity(m, oracle, 1e-9);
+  EXPECT_FALSE(f.ok);
+  EXPECT_EQ(f.cells_unknown_phase, 1u);
+}
+
+TEST(CertifyWithScene, SquareInclusionAndVoid) {
+  {
+    const geometry::Oracle2 oracle(square_scene(false));
+    const Certificate c = certify(square_mesh(), oracle, CertifyOptions{});
+    EXPECT_TRUE(c.passed());
+    ASSERT_TRUE(c.fidelity.has_value());
+    EXPECT_TRUE(c.domain_from_scene);
+    EXPECT_NEAR(c.conformity.expected_measure, 1.0, 1e-14);
+    EXPECT_EQ(c.scene_source, "square-scene.json");
+    const auto j = nlohmann::json::parse(certificate_json(c));
+    EXPECT_EQ(j["fidelity"]["ok"], true);
+    EXPECT_EQ(j["fidelity"]["phases"][1]["name"], "square");
+    EXPECT_NE(certificate_html(c).find("Phase fidelity"), std::string::npos);
+    EXPECT_NE(certificate_summary(c).find("fidelity: ok"), std::string::npos);
+  }
+  {
+    const geometry::Oracle2 oracle(square_scene(true));
+    const mesh::Mesh2 full = square_mesh();
+    const mesh::Mesh2 m = filtered(full, [&](std::size_t c) { return full.cell_phase[c] == 1; });
+    const Certificate c = certify(m, oracle, CertifyOptions{});
+    EXPECT_TRUE(c.passed());
+    EXPECT_NEAR(c.conformity.expected_measure, 0.75, 1e-12);
+    EXPECT_EQ(c.conformity.inner_boundary_facets, 8u);
+    const mesh::Mesh2 holed = filtered(full, [&](std::size_t c) { return full.cell_phase[c] == 1 && c > 1; });
+    const Certificate h = certify(holed, oracle, CertifyOptions{});
+    EXPECT_FALSE(h.passed());
+    EXPECT_FALSE(h.fidelity->ok);
+  }
+}
+
+}  // namespace
+}  // namespace cisamr::quality
