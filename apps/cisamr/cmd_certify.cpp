@@ -22,6 +22,7 @@ namespace {
 struct CertifyArgs {
   std::string mesh, scene, html, json;
   double bound = 0;  // 0: the dimension's bound
+  double fidelity_tolerance = -1;  // < 0: 1e-9 of the domain diagonal
 };
 
 void progress(const GlobalFlags& flags, const char* what) {
@@ -38,6 +39,7 @@ quality::Certificate certify_loaded(const CertifyArgs& args, const io::LoadedMes
                                     const GlobalFlags& flags, PhaseTimes& times) {
   quality::CertifyOptions options;
   options.bound = args.bound;
+  options.fidelity_tolerance = args.fidelity_tolerance;
   if (args.scene.empty()) {
     ScopedPhase timer(&times, "certify");
     progress(flags, "checking the mesh (domain = its bounding box)");
@@ -96,6 +98,10 @@ void add_certify_command(CLI::App& app, GlobalFlags& flags, int& exit_code) {
       },
       "X>=1");
   cmd->add_option("--bound", args->bound, "Aspect-ratio bound (default 3 in 2D, 5 in 3D)")->check(at_least_one);
+  cmd->add_option("--fidelity-tolerance", args->fidelity_tolerance,
+                  "Distance a node may lie from the phases it serves (default 1e-9 of the domain diagonal; "
+                  "`cisamr mesh --report` gives the largest collapse deviation of sub-resolution features)")
+      ->check(CLI::PositiveNumber);
   cmd->callback([args, &flags, &exit_code] {
     PhaseTimes times;
     progress(flags, "reading the mesh");

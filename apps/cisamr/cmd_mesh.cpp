@@ -71,7 +71,10 @@ nlohmann::json report_json(const MeshArgs& args, const geometry::SceneDesc& scen
                     {"cut_quads", stats.cut_quads},
                     {"double_diagonal_splits", stats.double_diagonal},
                     {"hanging_node_cells", stats.hanging_cells},
-                    {"unresolved_quads", stats.unresolved}};
+                    {"unresolved_quads", stats.unresolved},
+                    {"finest_level", stats.max_level},
+                    {"collapsed_features", stats.collapsed},
+                    {"max_collapse_deviation", stats.max_collapse_deviation}};
   nlohmann::json times = nlohmann::json::object();
   for (const auto& [name, seconds] : stats.times.phases())
     times[name] = {{"min", seconds}, {"max", seconds}, {"mean", seconds}};
@@ -136,6 +139,10 @@ void add_mesh_command(CLI::App& app, GlobalFlags& flags, int& exit_code) {
                   result.mesh.node_count(), result.mesh.cell_count(), aspect.max, bound, total);
     if (flags.verbose)
       for (const auto& [name, seconds] : result.stats.times.phases()) std::printf("  %-10s %8.3f s\n", name.c_str(), seconds);
+    if (result.stats.collapsed > 0 && !flags.quiet)
+      std::printf("%lld quads held a feature below the finest resolution (a tangency, a thin gap or a wedge "
+                  "sharper than the bound allows); collapsed with nodes at most %.3g from the phases they serve\n",
+                  static_cast<long long>(result.stats.collapsed), result.stats.max_collapse_deviation);
     if (result.stats.unresolved > 0)
       std::fprintf(stderr, "cisamr: warning: %lld quads below the finest level's resolution\n",
                    static_cast<long long>(result.stats.unresolved));

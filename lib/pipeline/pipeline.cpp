@@ -85,9 +85,11 @@ Result2 run2(const geometry::Oracle2& oracle, const grid::Lattice2& lattice, con
       m.cell_phase.push_back(phase.id);
     }
     m.coords.resize(2 * static_cast<std::size_t>(next));
+    result.node_key.resize(static_cast<std::size_t>(next));
     for (std::size_t n = 0; n < total; ++n) {
       const std::int32_t id = new_id[n];
       if (id < 0) continue;
+      result.node_key[static_cast<std::size_t>(id)] = n < lattice_count ? nodes.key[n] : Result2::kInteriorNode;
       const Vec2& p = n < lattice_count ? nodes.position[n] : tris.extra_points[n - lattice_count];
       m.coords[2 * static_cast<std::size_t>(id)] = p[0];
       m.coords[2 * static_cast<std::size_t>(id) + 1] = p[1];

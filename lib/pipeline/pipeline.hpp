@@ -3,6 +3,7 @@
 // The same call meshes the whole domain (one box, no ghost) or one partition's box with
 // its ghost layer; the parallel mesher runs it unchanged on every partition (DESIGN.md §3).
 #include <cstdint>
+#include <vector>
 
 #include "core/timer.hpp"
 #include "geometry/oracle2.hpp"
@@ -29,6 +30,10 @@ struct Stats {
 
 struct Result2 {
   mesh::Mesh2 mesh;
+  // Per output node: its lattice key (grid/lattice.hpp key2), or kInteriorNode for points
+  // created inside a cell (never on a partition face). Partitions merge nodes by key.
+  std::vector<std::uint64_t> node_key;
+  static constexpr std::uint64_t kInteriorNode = ~std::uint64_t{0};
   Stats stats;
 };
 

@@ -96,8 +96,8 @@ FidelityReport check_fidelity(const mesh::Mesh2& m, const geometry::Oracle2& ora
       const double d = oracle.distance_to_phase(p, k);
       if (!(d <= worst)) worst = d, worst_phase = k;  // NaN counts as off
     }
+    if (std::isfinite(worst)) r.max_deviation = std::max(r.max_deviation, worst);
     if (worst <= tol) continue;
-    r.max_deviation = std::max(r.max_deviation, worst);
     char buf[96];
     std::snprintf(buf, sizeof buf, " is %.3g from phase %d", worst,
                   worst_phase >= 0 ? scene.phases[std::size_t(worst_phase)].id : -1);
@@ -130,9 +130,9 @@ FidelityReport check_fidelity(const mesh::Mesh2& m, const geometry::Oracle2& ora
     double nearest = std::numeric_limits<double>::infinity();
     for (int k = 0; k < phases; ++k)
       if (scene.phases[std::size_t(k)].is_void) nearest = std::min(nearest, oracle.distance_to_phase(m.point(n), k));
+    if (std::isfinite(nearest)) r.max_deviation = std::max(r.max_deviation, nearest);
     if (nearest <= tol) continue;
     ++r.boundary_nodes_off_void;
-    if (std::isfinite(nearest)) r.max_deviation = std::max(r.max_deviation, nearest);
     if (shown_off_void++ < 3) {
       char buf[96];
       if (std::isfinite(nearest))
