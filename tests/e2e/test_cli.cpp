@@ -1,0 +1,151 @@
+// End-to-end tests of the `cisamr` command: exit codes, error messages naming the file and
+// the field, and no output file left behind on failure (DESIGN.md §6).
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <unistd.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct CommandResult {
+  int exit_code;
+  std::string output;  // stdout and stderr
+};
+
+CommandResult run(const std::string& args) {
+  const std::string cmd = std::string(CISAMR_BINARY_DIR) + "/bin/cisamr " + args + " 2>&1";
+  FILE* pipe = popen(cmd.c_str(), "r");
+  CommandResult r{-1, {}};
+  if (!pipe) return r;
+  std::array<char, 4096> buf;
+  while (std::fgets(buf.data(), buf.size(), pipe)) r.output += buf.data();
+  const int status = pclose(pipe);
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+class Cli : public ::testing::Test {
+ protected:
+  fs::path dir;
+  void SetUp() override {
+    dir = fs::temp_directory_path() / ("cisamr-cli-" + std::to_string(::getpid()) + "-" +
+                                       ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+  }
+  void TearDown() override { fs::remove_all(dir); }
+  std::string write(const std::string& name, const std::string& text) {
+    const fs::path p = dir / name;
+    std::ofstream(p) << text;
+    return p.string();
+  }
+  // Nothing but the inputs in the folder: no output, no temporary.
+  std::size_t files_other_than_json() const {
+    std::size_t n = 0;
+    for (const auto& e : fs::directory_iterator(dir))
+      if (e.path().extension() != ".json") ++n;
+    return n;
+  }
+};
+
+const char* kHeader = R"({"format": "cisamr-scene/1", "dimension": 2,
+  "domain": {"min": [0, 0], "max": [10, 10]}, "mesh": {"h": 1, "levels": 1},
+  "phases": [{"id": 1, "name": "matrix"}, {"id": 2, "name": "particle"}, {"id": 3, "name": "fibre"}],
+  "inclusions": [)";
+
+struct BadScene {
+  const char* name;
+  std::string json;
+  const char* field;  // must appear in the message
+};
+
+TEST_F(Cli, MalformedScenesExitWithCode2NamingFileAndFieldAndLeaveNoOutput) {
+  const std::string h = kHeader;
+  const BadScene cases[] = {
+      {"bad-json", "{\"format\": \"cisamr-scene/1\", \"dimension\": 2,,}", "line"},
+      {"missing-field", R"({"format": "cisamr-scene/1", "dimension": 2, "mesh": {"h": 1}})", "domain"},
+      {"negative-radius", h + R"({"shape": "circle", "center": [5, 5], "radius": -1}]})", "inclusions[0].radius"},
+      {"h-not-dividing", R"({"format": "cisamr-scene/1", "dimension": 2, "domain": {"min": [0, 0], "max": [10, 10]},
+        "mesh": {"h": 3}, "inclusions": []})", "mesh.h"},
+      {"unknown-shape", h + R"({"shape": "hexagon", "center": [5, 5], "radius": 1}]})", "inclusions[0]"},
+      {"open-polygon", h + R"({"shape": "polygon", "vertices": [[1, 1], [4, 1]]}]})", "inclusions[0].vertices"},
+      {"bad-nurbs-knots", h + R"({"shape": "nurbs", "degree": 2, "knots": [0, 0, 1, 0.5, 1, 1],
+        "control_points": [[1, 1], [3, 1], [3, 3]], "weights": [1, 1, 1]}]})", "inclusions[0].knots"},
+      {"unknown-phase", h + R"({"shape": "circle", "center": [5, 5], "radius": 1, "phase": 7}]})", "inclusions[0].phase"},
+      {"overlapping-phases", h + R"({"shape": "circle", "center": [4, 5], "radius": 2, "phase": 2},
+        {"shape": "circle", "center": [6, 5], "radius": 2, "phase": 3}]})", "inclusions[1]"},
+      {"self-intersecting-polygon", h + R"({"shape": "polygon", "vertices": [[1, 1], [4, 4], [4, 1], [1, 4]]}]})",
+       "inclusions[0]"},
+      {"unknown-key", h + R"({"shape": "circle", "center": [5, 5], "raduis": 1}]})", "raduis"},
+      {"wrong-format", R"({"format": "gmsh", "dimension": 2})", "format"},
+  };
+  for (const BadScene& c : cases) {
+    SCOPED_TRACE(c.name);
+    const std::string scene = write(std::string(c.name) + ".json", c.json);
+    const std::string out = (dir / "out.vtu").string();
+    const CommandResult r = run("mesh " + scene + " -o " + out + " --report " + (dir / "report.txt").string());
+    EXPECT_EQ(r.exit_code, 2) << r.output;
+    EXPECT_NE(r.output.find("cisamr: error: "), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find(scene), std::string::npos) << "message does not name the file: " << r.output;
+    EXPECT_NE(r.output.find(c.field), std::string::npos) << "message does not name " << c.field << ": " << r.output;
+    EXPECT_EQ(files_other_than_json(), 0u) << "output left behind";
+  }
+  // An unreadable (missing) scene file.
+  const CommandResult missing = run("mesh " + (dir / "nowhere.json").string() + " -o " + (dir / "out.vtu").string());
+  EXPECT_EQ(missing.exit_code, 2);
+  EXPECT_NE(missing.output.find("nowhere.json"), std::string::npos);
+  EXPECT_EQ(files_other_than_json(), 0u);
+}
+
+TEST_F(Cli, BadOutputsExitWithCode2) {
+  const std::string scene = write("ok.json", std::string(kHeader) + R"({"shape": "circle", "center": [5, 5], "radius": 2}]})");
+  const CommandResult ext = run("mesh " + scene + " -o " + (dir / "out.xyz").string());
+  EXPECT_EQ(ext.exit_code, 2);
+  EXPECT_NE(ext.output.find("unknown mesh format"), std::string::npos) << ext.output;
+  const CommandResult dir_missing = run("mesh " + scene + " -o " + (dir / "no" / "such" / "dir" / "out.vtu").string());
+  EXPECT_EQ(dir_missing.exit_code, 2);
+  EXPECT_NE(dir_missing.output.find("cannot write"), std::string::npos) << dir_missing.output;
+  EXPECT_EQ(files_other_than_json(), 0u);
+  const CommandResult usage = run("mesh");
+  EXPECT_EQ(usage.exit_code, 2);
+}
+
+TEST_F(Cli, MeshesEveryFormatAndCertifies) {
+  const std::string scene = write("ok.json", std::string(kHeader) +
+                                                 R"({"shape": "circle", "center": [4.3, 5.1], "radius": 2.2},
+       {"shape": "ellipse", "center": [7.5, 3], "semi_axes": [1.5, 0.7], "angle": 0.4, "phase": 3}]})");
+  for (const char* ext : {"vtu", "msh", "inp", "mesh"}) {
+    SCOPED_TRACE(ext);
+    const std::string out = (dir / (std::string("out.") + ext)).string();
+    const CommandResult r = run("mesh " + scene + " -o " + out + " --quiet");
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    ASSERT_TRUE(fs::exists(out));
+    const CommandResult c = run("certify " + out + " --scene " + scene + " --quiet");
+    EXPECT_EQ(c.exit_code, 0) << c.output;
+  }
+  const CommandResult with_report = run("mesh " + scene + " -o " + (dir / "r.vtu").string() + " --report " +
+                              (dir / "r.report").string() + " --svg " + (dir / "r.svg").string());
+  EXPECT_EQ(with_report.exit_code, 0) << with_report.output;
+  std::ifstream report(dir / "r.report");
+  const std::string text((std::istreambuf_iterator<char>(report)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("\"aspect_ratio\""), std::string::npos);
+  EXPECT_NE(text.find("\"timings_s\""), std::string::npos);
+  EXPECT_TRUE(fs::exists(dir / "r.svg"));
+  // A bound the mesh cannot meet: the mesh is written, the exit code says 3.
+  const CommandResult strict = run("mesh " + scene + " -o " + (dir / "s.vtu").string() + " --bound 1.01 --quiet");
+  EXPECT_EQ(strict.exit_code, 3);
+  EXPECT_TRUE(fs::exists(dir / "s.vtu"));
+  const CommandResult help = run("mesh --help");
+  EXPECT_EQ(help.exit_code, 0);
+  EXPECT_NE(help.output.find("--report"), std::string::npos);
+}
+
+}  // namespace
