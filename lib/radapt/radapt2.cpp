@@ -68,18 +68,16 @@ Nodes2 snap2(const geometry::Oracle2& oracle, const samr::RefinedGrid2& g, const
   const std::int64_t fine_max_y = lattice.coarse_cells[1] * lattice.units(0);
   const auto can_move = [&](std::int64_t x, std::int64_t y, int axis) {
     // On the domain boundary a node may only slide along it.
-    return axis == 0 ? !(x == 0 || x == fine_max_x) && true : !(y == 0 || y == fine_max_y);
+    return axis == 0 ? !(x == 0 || x == fine_max_x) : !(y == 0 || y == fine_max_y);
   };
   std::vector<std::uint8_t> visited(n, 0);
   std::vector<Snap> snaps;
-  std::vector<std::int32_t> stayed;  // nodes of cut cells that did not snap in pass 1
-  std::vector<std::int64_t> stayed_size;
   std::vector<geometry::Crossing> crossings;
   static constexpr int kDirections[4][2] = {{1, 0}, {-1, 0}, {0, 1}, {0, -1}};  // +x,-x,+y,-y
 
   // The crossing of edge v→w nearest v, as a distance in units of the edge length, or +inf.
   const auto nearest_crossing = [&](std::int64_t vx, std::int64_t vy, std::int64_t wx, std::int64_t wy,
-                                    std::int32_t v, std::int32_t w, int phase, Snap& out) -> double {
+                                    std::int32_t v, std::int32_t w, Snap& out) -> double {
     const bool v_first = grid::key2(vx, vy) < grid::key2(wx, wy);
     const std::int32_t a = v_first ? v : w, b = v_first ? w : v;
     const Vec2 pa = nodes.position[static_cast<std::size_t>(a)], pb = nodes.position[static_cast<std::size_t>(b)];
@@ -92,13 +90,12 @@ Nodes2 snap2(const geometry::Oracle2& oracle, const samr::RefinedGrid2& g, const
     const geometry::Crossing& cross = v_first ? crossings.front() : crossings.back();
     out.position = {pa[0] + cross.t * (pb[0] - pa[0]), pa[1] + cross.t * (pb[1] - pa[1])};
     out.mask = (PhaseMask{1} << cross.from_phase) | (PhaseMask{1} << cross.to_phase);
-    (void)phase;
     // A crossing exactly half-way belongs to the endpoint with the smaller key.
     const double d = v_first ? cross.t : 1.0 - cross.t;
     return (d == options.alpha && !v_first) ? std::nextafter(d, 1.0) : d;
   };
 
-  // Pass 1: each node of a cut cell takes its nearest crossing closer than alpha·h_l.
+  // Each node of a cut cell takes its nearest crossing closer than alpha·h_l.
   for (std::int32_t c = 0; c < static_cast<std::int32_t>(forest.size()); ++c) {
     if (!forest.is_leaf(c) || !g.is_cut(c)) continue;
     const std::int64_t x0 = forest.fine_x(c), y0 = forest.fine_y(c), s = forest.fine_size(c);
@@ -118,15 +115,10 @@ Nodes2 snap2(const geometry::Oracle2& oracle, const samr::RefinedGrid2& g, const
         const std::int32_t w = nodes.id(grid::key2(wx, wy));
         if (w < 0) continue;  // beyond the ghost layer
         if (nodes.mask[static_cast<std::size_t>(w)] & (PhaseMask{1} << phase)) continue;  // no phase change
-        const double distance = nearest_crossing(vx, vy, wx, wy, v, w, phase, candidate);
+        const double distance = nearest_crossing(vx, vy, wx, wy, v, w, candidate);
         if (distance <= options.alpha && distance < best) best = distance, snap = candidate;
       }
-      if (snap.mask != 0) {
-        snaps.push_back(snap);
-      } else {
-        stayed.push_back(v);
-        stayed_size.push_back(s);
-      }
+      if (snap.mask != 0) snaps.push_back(snap);
     }
   }
   // 3. Apply all moves at once.
