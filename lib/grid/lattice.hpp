@@ -31,8 +31,9 @@ struct Lattice {
   int max_level = 0;   // Lmax: finest level anywhere in the domain
   std::array<std::int64_t, Dim> coarse_cells{};  // whole domain, per axis
 
-  double fine_spacing() const { return std::ldexp(h, -max_level); }
-  double spacing(int level) const { return std::ldexp(h, -level); }
+  // h·2^-level, exactly (a power-of-two scaling), without a libm call in hot loops.
+  double spacing(int level) const { return h / static_cast<double>(std::int64_t{1} << level); }
+  double fine_spacing() const { return spacing(max_level); }
   // Finest-lattice units per cell of `level`.
   std::int64_t units(int level) const { return std::int64_t{1} << (max_level - level); }
   double coordinate(int d, std::int64_t fine_index) const {

@@ -17,12 +17,29 @@ Nodes2 snap2(const geometry::Oracle2& oracle, const samr::RefinedGrid2& g, const
   const grid::QuadForest& forest = g.forest;
   const grid::Lattice2& lattice = forest.lattice();
   Nodes2 nodes;
-  nodes.index = grid::KeyMap(forest.size());
+  {
+    auto& r = nodes.registry;
+    r.unit = lattice.units(0);
+    r.x0 = forest.range().lo[0];
+    r.y0 = forest.range().lo[1];
+    r.nx = forest.range().count(0);
+    r.ny = forest.range().count(1);
+    r.coarse.assign(static_cast<std::size_t>((r.nx + 1) * (r.ny + 1)), -1);
+    r.fine = grid::KeyMap(forest.size() - static_cast<std::size_t>(forest.root_count()) + 16);
+  }
   nodes.key.reserve(forest.size());
 
   const auto add_node = [&](std::int64_t x, std::int64_t y) -> std::int32_t {
     bool inserted = false;
-    const auto id = nodes.index.insert(grid::key2(x, y), static_cast<std::int32_t>(nodes.key.size()), inserted);
+    const auto next = static_cast<std::int32_t>(nodes.key.size());
+    std::int32_t id;
+    if (std::int32_t* slot = nodes.registry.coarse_slot(x, y)) {
+      inserted = *slot < 0;
+      if (inserted) *slot = next;
+      id = *slot;
+    } else {
+      id = nodes.registry.fine.insert(grid::key2(x, y), next, inserted);
+    }
     if (inserted) {
       nodes.key.push_back(grid::key2(x, y));
       nodes.position.push_back({lattice.coordinate(0, x), lattice.coordinate(1, y)});
@@ -33,11 +50,13 @@ Nodes2 snap2(const geometry::Oracle2& oracle, const samr::RefinedGrid2& g, const
 
   // 1. Corners of every leaf, and their phases. A leaf that no boundary meets lies inside
   //    one phase, so its corners take that phase without asking the oracle per corner.
+  nodes.cell_corners.resize(forest.size());
   const PhaseMask matrix_bit = PhaseMask{1} << oracle.matrix_phase();
   for (std::int32_t c = 0; c < static_cast<std::int32_t>(forest.size()); ++c) {
     if (!forest.is_leaf(c)) continue;
     const std::int64_t x = forest.fine_x(c), y = forest.fine_y(c), s = forest.fine_size(c);
     const std::int32_t ids[4] = {add_node(x, y), add_node(x + s, y), add_node(x + s, y + s), add_node(x, y + s)};
+    nodes.cell_corners[static_cast<std::size_t>(c)] = {ids[0], ids[1], ids[2], ids[3]};
     const auto candidates = g.candidates_of_root(g.root_of(c));
     if (g.is_cut(c)) {
       for (std::int32_t id : ids)
@@ -100,9 +119,9 @@ Nodes2 snap2(const geometry::Oracle2& oracle, const samr::RefinedGrid2& g, const
     if (!forest.is_leaf(c) || !g.is_cut(c)) continue;
     const std::int64_t x0 = forest.fine_x(c), y0 = forest.fine_y(c), s = forest.fine_size(c);
     const std::int64_t corners[4][2] = {{x0, y0}, {x0 + s, y0}, {x0 + s, y0 + s}, {x0, y0 + s}};
-    for (const auto& corner : corners) {
-      const std::int64_t vx = corner[0], vy = corner[1];
-      const std::int32_t v = nodes.id(grid::key2(vx, vy));
+    for (int k = 0; k < 4; ++k) {
+      const std::int64_t vx = corners[k][0], vy = corners[k][1];
+      const std::int32_t v = nodes.cell_corners[static_cast<std::size_t>(c)][static_cast<std::size_t>(k)];
       if (visited[static_cast<std::size_t>(v)]) continue;
       visited[static_cast<std::size_t>(v)] = 1;
       const int phase = single_phase(nodes.mask[static_cast<std::size_t>(v)]);

@@ -3,6 +3,7 @@
 // interface crossing along one of its four axis edges, when that crossing is closer than
 // alpha·(edge length). Decisions use original positions only, so they are independent of
 // visiting order and identical on every partition that sees the node (lib/radapt/README.md).
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -25,10 +26,34 @@ struct Nodes2 {
   std::vector<Vec2> position;
   std::vector<PhaseMask> mask;
   std::vector<std::uint8_t> snapped;  // 1 if moved onto an interface
-  grid::KeyMap index{1024};           // key -> node id
   std::int64_t snapped_count = 0;
+  // Node ids of each leaf's corners (counter-clockwise from the lower left), indexed by
+  // forest cell; saves the hash lookups of later phases.
+  std::vector<std::array<std::int32_t, 4>> cell_corners;
 
-  std::int32_t id(grid::LatticeKey k) const { return index.find(k); }
+  // Node registry: nodes on the coarse lattice (most of them) by direct index, the others
+  // (created by SAMR) in a hash map.
+  struct Registry {
+    std::int64_t x0 = 0, y0 = 0, nx = 0, ny = 0, unit = 1;  // coarse node range, fine units per cell
+    std::vector<std::int32_t> coarse;                        // (nx+1)·(ny+1), -1 = none
+    grid::KeyMap fine{1024};
+
+    std::int32_t* coarse_slot(std::int64_t x, std::int64_t y) {
+      return const_cast<std::int32_t*>(static_cast<const Registry*>(this)->coarse_slot(x, y));
+    }
+    const std::int32_t* coarse_slot(std::int64_t x, std::int64_t y) const {
+      if (x % unit || y % unit) return nullptr;
+      const std::int64_t i = x / unit - x0, j = y / unit - y0;
+      if (i < 0 || j < 0 || i > nx || j > ny) return nullptr;
+      return &coarse[static_cast<std::size_t>(j * (nx + 1) + i)];
+    }
+  } registry;
+
+  std::int32_t id(grid::LatticeKey k) const {
+    const std::int64_t x = grid::key2_x(k), y = grid::key2_y(k);
+    if (const std::int32_t* slot = registry.coarse_slot(x, y)) return *slot;
+    return registry.fine.find(k);
+  }
 };
 
 // Registers the corners of every leaf, classifies them and snaps nodes of cut cells.

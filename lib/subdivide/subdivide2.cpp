@@ -89,8 +89,9 @@ class Subdivider {
     const std::int64_t x = forest_.fine_x(c), y = forest_.fine_y(c), s = forest_.fine_size(c);
     QuadPoints q;
     const std::int64_t cx[4] = {x, x + s, x + s, x}, cy[4] = {y, y, y + s, y + s};
+    const auto& corner_ids = nodes_.cell_corners[static_cast<std::size_t>(c)];
     for (int k = 0; k < 4; ++k) {
-      q.id[k] = node(cx[k], cy[k]);
+      q.id[k] = corner_ids[static_cast<std::size_t>(k)];
       q.p[k] = nodes_.position[static_cast<std::size_t>(q.id[k])];
       q.m[k] = nodes_.mask[static_cast<std::size_t>(q.id[k])];
     }
