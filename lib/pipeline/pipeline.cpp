@@ -60,6 +60,7 @@ Result2 run2(const geometry::Oracle2& oracle, const grid::Lattice2& lattice, con
   stats.unresolved = tris.unresolved;
   stats.collapsed = tris.collapsed;
   stats.max_collapse_deviation = tris.max_collapse_deviation;
+  stats.max_collapse_ratio = tris.max_collapse_ratio;
   stats.min_collapse_level = tris.collapsed ? tris.min_collapse_level : -1;
   stats.max_level = lattice.max_level;
 

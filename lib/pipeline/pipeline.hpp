@@ -23,6 +23,7 @@ struct Stats {
   std::int64_t cut_quads = 0, double_diagonal = 0, hanging_cells = 0, unresolved = 0;
   std::int64_t collapsed = 0;          // quads holding a feature below their resolution
   double max_collapse_deviation = 0;   // largest node distance from a phase it serves
+  double max_collapse_ratio = 0;       // the same relative to the size of the collapsed cell
   int min_collapse_level = -1;         // coarsest level of a collapse (-1: none)
   int max_level = 0;                   // Lmax of the lattice
   PhaseTimes times;

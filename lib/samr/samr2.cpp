@@ -32,13 +32,6 @@ class Refiner {
 
   int max_level() const { return g_.forest.lattice().max_level; }
 
-  // Does cell c touch the domain boundary? (An interface there either crosses the domain
-  // boundary or leaves a gap to it; both need the finest resolution.)
-  bool on_domain_boundary(std::int32_t c) const {
-    const grid::Lattice2& l = g_.forest.lattice();
-    const std::int64_t x = g_.forest.fine_x(c), y = g_.forest.fine_y(c), s = g_.forest.fine_size(c);
-    return x == 0 || y == 0 || x + s == l.coarse_cells[0] * l.units(0) || y + s == l.coarse_cells[1] * l.units(0);
-  }
 
   void visit(std::int32_t c) {
     const auto cell = g_.forest.cell(c);
@@ -65,12 +58,8 @@ class Refiner {
       const int group = oracle_.interface_group(k);
       if (std::find(groups_.begin(), groups_.end(), group) == groups_.end()) groups_.push_back(group);
     }
-    // R2 and R5: two interface groups, or the boundaries of two inclusions (a C0 corner of
-    // a union), or an interface on the domain boundary (crossing it, or leaving a gap to
-    // it): features that may be sharp or thin, resolved down to the finest level.
-    if (level < max_level() && (groups_.size() >= 2 || g_.touch_count[static_cast<std::size_t>(c)] >= 2 ||
-                                on_domain_boundary(c)))
-      split = true;
+    // R2: two interface groups in one cell, separated down to the finest level if need be.
+    if (level < max_level() && groups_.size() >= 2) split = true;
     // R4: the 3x3 block around a cut cell has its level; the 5x5 block (less corners)
     // holds no finer cell, so neighbours of the cut cell carry no hanging node.
     if (!split) {

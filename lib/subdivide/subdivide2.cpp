@@ -215,6 +215,7 @@ class Subdivider {
       if (choice.worst < std::numeric_limits<double>::infinity()) {
         ++out_.collapsed;
         out_.max_collapse_deviation = std::max(out_.max_collapse_deviation, deviation);
+        out_.max_collapse_ratio = std::max(out_.max_collapse_ratio, deviation / forest_.lattice().spacing(level));
         out_.min_collapse_level = std::min(out_.min_collapse_level, level);
         if (out_.collapsed_at.size() < 16)
           out_.collapsed_at.push_back({0.25 * (q.p[0][0] + q.p[1][0] + q.p[2][0] + q.p[3][0]),

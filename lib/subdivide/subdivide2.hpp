@@ -24,6 +24,7 @@ struct Triangles2 {
   // Features below the resolution of their cell, collapsed (see README.md).
   std::int64_t collapsed = 0;
   double max_collapse_deviation = 0;    // largest distance of a node from a phase it serves
+  double max_collapse_ratio = 0;        // the same, relative to the collapsed cell's size
   int min_collapse_level = 1 << 20;     // coarsest level at which a collapse happened
   std::vector<Vec2> collapsed_at;
 };
