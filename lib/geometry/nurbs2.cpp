@@ -10,6 +10,7 @@
 #include <cmath>
 #include <limits>
 
+#include "geometry/box_tests.hpp"
 #include "geometry/predicates2.hpp"
 
 namespace cisamr::geometry::nurbs {
@@ -104,28 +105,11 @@ int piece_parity(const Region& r, const double* h, const Vec2& p, int depth) {
   return a ^ c;
 }
 
-bool segment_meets_box(const Vec2& u, const Vec2& v, const Box2& b) {
-  double t0 = 0, t1 = 1;
-  const double d[2] = {v[0] - u[0], v[1] - u[1]};
-  for (int k = 0; k < 2; ++k) {
-    if (d[k] == 0) {
-      if (u[k] < b.min[k] || u[k] > b.max[k]) return false;
-    } else {
-      double ta = (b.min[k] - u[k]) / d[k], tb = (b.max[k] - u[k]) / d[k];
-      if (ta > tb) std::swap(ta, tb);
-      t0 = std::max(t0, ta);
-      t1 = std::min(t1, tb);
-      if (t0 > t1) return false;
-    }
-  }
-  return true;
-}
-
 void piece_hits(const Region& r, const double* h, const Vec2& a, const Vec2& b, int depth,
                 std::vector<double>& ts) {
   const int deg = r.degree;
   const Box2 bx = inflate(control_box(h, deg), 1e-14 * r.size);
-  if (!segment_meets_box(a, b, bx)) return;
+  if (!detail::segment_meets_box(a, b, bx)) return;
   if (flatness(h, deg) <= 1e-15 * r.size || diag(bx) <= 1e-15 * r.size || depth > 80) {
     const Vec2 u = cart(h), v = cart(h + 3 * deg);
     if (!exact::segments_intersect(a, b, u, v)) return;

@@ -6,11 +6,12 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <numeric>
 #include <string>
 
 #include "core/error.hpp"
 #include "geometry/box_index.hpp"
+#include "geometry/box_tests.hpp"
+#include "geometry/overlap_groups.hpp"
 #include "geometry/nurbs2.hpp"
 #include "geometry/predicates2.hpp"
 #include "geometry/shapes.hpp"
@@ -79,25 +80,6 @@ double segment_distance(const Vec2& p, const Vec2& u, const Vec2& v) {
   double t = dd > 0 ? ((p[0] - u[0]) * dx + (p[1] - u[1]) * dy) / dd : 0;
   t = std::clamp(t, 0.0, 1.0);
   return std::hypot(p[0] - (u[0] + t * dx), p[1] - (u[1] + t * dy));
-}
-
-// Does the segment [u, v] meet the closed box? (Liang–Barsky; rounding-level slack is
-// added by the callers that need conservativeness.)
-bool segment_meets_box(const Vec2& u, const Vec2& v, const Box2& b) {
-  double t0 = 0, t1 = 1;
-  const double d[2] = {v[0] - u[0], v[1] - u[1]};
-  for (int k = 0; k < 2; ++k) {
-    if (d[k] == 0) {
-      if (u[k] < b.min[k] || u[k] > b.max[k]) return false;
-    } else {
-      double ta = (b.min[k] - u[k]) / d[k], tb = (b.max[k] - u[k]) / d[k];
-      if (ta > tb) std::swap(ta, tb);
-      t0 = std::max(t0, ta);
-      t1 = std::min(t1, tb);
-      if (t0 > t1) return false;
-    }
-  }
-  return true;
 }
 
 // Closest distance from p to an axis-aligned ellipse x²/a² + y²/b² = 1 (Eberly's robust
@@ -226,7 +208,6 @@ struct Oracle2::Impl {
   }
 
   void validate_and_build(const SceneDesc& s);
-  void check_overlaps();
 
   // Distance machinery (README: distances). The boundary of k as pieces s ∈ [0,1].
   int piece_count(std::int32_t k) const;
@@ -460,7 +441,7 @@ void Oracle2::Impl::validate_and_build(const SceneDesc& s) {
   boxes.reserve(items.size());
   for (const Item& it : items) boxes.push_back(it.box);
   index = std::make_unique<BoxIndex2>(boxes);
-  check_overlaps();
+  detail::group_overlapping_inclusions(*this);
 }
 
 // Do the closed regions of i and j meet (interiors == false) or do their interiors meet
@@ -527,29 +508,6 @@ bool Oracle2::Impl::regions_intersect(std::int32_t i, std::int32_t j, bool inter
   return false;
 }
 
-void Oracle2::Impl::check_overlaps() {
-  const auto pairs = overlapping_box_pairs(boxes);
-  // Union–find over same-phase pairs whose closed regions meet.
-  std::vector<std::int32_t> parent(items.size());
-  std::iota(parent.begin(), parent.end(), 0);
-  auto find = [&](std::int32_t x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  };
-  for (auto [i, j] : pairs) {
-    if (items[i].phase != items[j].phase) {
-      if (regions_intersect(i, j, true))
-        throw InputError(scene.source, inclusion_field(static_cast<std::size_t>(j)),
-                         "overlaps " + inclusion_field(static_cast<std::size_t>(i)) +
-                             ", which has a different phase");
-    } else if (regions_intersect(i, j, false)) {
-      const std::int32_t ri = find(i), rj = find(j);
-      if (ri != rj) parent[std::max(ri, rj)] = std::min(ri, rj);
-    }
-  }
-  for (std::size_t k = 0; k < items.size(); ++k) items[k].group = find(static_cast<std::int32_t>(k));
-}
-
 // ---------------------------------------------------------------- public API
 Oracle2::Oracle2(const SceneDesc& scene) : impl_(std::make_unique<Impl>()) {
   impl_->validate_and_build(scene);
@@ -580,16 +538,7 @@ bool Oracle2::boundary_touches(std::int32_t k, const Box2& box_in) const {
   switch (it.kind) {
     case Kind::circle: {
       const CircleData& c = m.circles[it.data];
-      // The circle meets the box iff dist_min(c, box) ≤ r ≤ dist_max(c, box).
-      double near2 = 0, far2 = 0;
-      for (int d = 0; d < 2; ++d) {
-        const double lo = box.min[d] - c.c[d], hi = box.max[d] - c.c[d];
-        const double nd = lo > 0 ? lo : (hi < 0 ? hi : 0);
-        near2 += nd * nd;
-        far2 += std::max(lo * lo, hi * hi);
-      }
-      const double r2 = c.r * c.r;
-      return near2 <= r2 * (1 + 1e-12) && r2 <= far2 * (1 + 1e-12);
+      return detail::sphere_meets_box(c.c, c.r, box);
     }
     case Kind::ellipse: {
       // F(x) = u² + v² is convex: its max over the box is at a corner; its min is at the
@@ -624,7 +573,7 @@ bool Oracle2::boundary_touches(std::int32_t k, const Box2& box_in) const {
     case Kind::polygon: {
       auto poly = m.polygon(it);
       for (std::size_t i = 0, j = poly.size() - 1; i < poly.size(); j = i++)
-        if (segment_meets_box(poly[j], poly[i], box)) return true;
+        if (detail::segment_meets_box(poly[j], poly[i], box)) return true;
       return false;
     }
     case Kind::nurbs: return nurbs::touches_box(m.curves[it.data], box);

@@ -7,11 +7,12 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <numeric>
 #include <string>
 
 #include "core/error.hpp"
 #include "geometry/box_index.hpp"
+#include "geometry/box_tests.hpp"
+#include "geometry/overlap_groups.hpp"
 #include "geometry/predicates3.hpp"
 #include "geometry/shapes.hpp"
 #include "geometry/shapes_detail.hpp"
@@ -276,7 +277,6 @@ struct Oracle3::Impl {
   void crossings(const Vec3& a, const Vec3& b, std::span<const std::int32_t> cands,
                  std::vector<Crossing>& out) const;
   void validate_and_build(const SceneDesc& s);
-  void check_overlaps();
   bool regions_intersect(std::int32_t i, std::int32_t j, bool interiors) const;
   std::vector<Vec3> boundary_points(std::int32_t k, int per_axis) const;
   double matrix_distance(const Vec3& p) const;
@@ -483,7 +483,7 @@ void Oracle3::Impl::validate_and_build(const SceneDesc& s) {
   boxes.reserve(items.size());
   for (const Item& it : items) boxes.push_back(it.box);
   index = std::make_unique<BoxIndex3>(boxes);
-  check_overlaps();
+  detail::group_overlapping_inclusions(*this);
 }
 
 // Boundary points of k for overlap tests: STL vertices and face centroids; analytic
@@ -542,27 +542,6 @@ bool Oracle3::Impl::regions_intersect(std::int32_t i, std::int32_t j, bool inter
     }
   }
   return false;
-}
-
-void Oracle3::Impl::check_overlaps() {
-  const auto pairs = overlapping_box_pairs(boxes);
-  std::vector<std::int32_t> parent(items.size());
-  std::iota(parent.begin(), parent.end(), 0);
-  auto find = [&](std::int32_t x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  };
-  for (auto [i, j] : pairs) {
-    if (items[i].phase != items[j].phase) {
-      if (regions_intersect(i, j, true))
-        throw InputError(scene.source, inclusion_field(static_cast<std::size_t>(j)),
-                         "overlaps " + inclusion_field(static_cast<std::size_t>(i)) + ", which has a different phase");
-    } else if (regions_intersect(i, j, false)) {
-      const std::int32_t ri = find(i), rj = find(j);
-      if (ri != rj) parent[std::max(ri, rj)] = std::min(ri, rj);
-    }
-  }
-  for (std::size_t k = 0; k < items.size(); ++k) items[k].group = find(static_cast<std::int32_t>(k));
 }
 
 // ---------------------------------------------------------------- classification
@@ -698,15 +677,7 @@ bool Oracle3::boundary_touches(std::int32_t k, const Box3& box_in) const {
   switch (it.kind) {
     case Kind::sphere: {
       const SphereData& c = m.spheres[it.data];
-      double near2 = 0, far2 = 0;
-      for (int d = 0; d < 3; ++d) {
-        const double lo = box.min[d] - c.c[d], hi = box.max[d] - c.c[d];
-        const double nd = lo > 0 ? lo : (hi < 0 ? hi : 0);
-        near2 += nd * nd;
-        far2 += std::max(lo * lo, hi * hi);
-      }
-      const double r2 = c.r * c.r;
-      return near2 <= r2 * (1 + 1e-12) && r2 <= far2 * (1 + 1e-12);
+      return detail::sphere_meets_box(c.c, c.r, box);
     }
     case Kind::ellipsoid: {
       // q = |u|² is convex: max over the box at a corner; min bounded below by the

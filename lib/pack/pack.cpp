@@ -371,7 +371,7 @@ void Packer::finalize_template(Template& t) {
     t.measure = s.stl_volume * g->scale * g->scale * g->scale;
     t.use_cover = false;
   } else {
-    t.box = particle_box(t.shape, dim_);
+    t.box = particle_box(t.shape);
     t.body = particle_body(t.shape);
     t.measure = particle_measure(t.shape);
     if (p.shape == ShapeKind::fibre)

@@ -8,16 +8,13 @@
 #include <stdexcept>
 
 #include "core/error.hpp"
+#include "core/overloaded.hpp"
+#include "geometry/shapes.hpp"
 
 namespace cisamr::pack {
 namespace {
 
 using namespace geometry;
-
-template <class... F>
-struct Overloaded : F... { using F::operator()...; };
-template <class... F>
-Overloaded(F...) -> Overloaded<F...>;
 
 double sq(double x) { return x * x; }
 
@@ -125,78 +122,27 @@ std::vector<Vec3> periodic_cubic_polyline(const std::vector<Vec2>& cp, int per_s
   return out;
 }
 
-Box3 particle_box(const Shape& shape, int dim) {
-  Box3 b{};
-  auto from_points = [&](const auto& pts) {
-    b.min = {INFINITY, INFINITY, dim == 2 ? 0.0 : INFINITY};
-    b.max = {-INFINITY, -INFINITY, dim == 2 ? 0.0 : -INFINITY};
-    for (const auto& p : pts)
-      for (int d = 0; d < dim; ++d) {
+Box3 particle_box(const Shape& shape) {
+  if (const auto* c = std::get_if<NurbsCurve>(&shape)) {  // the control points' box contains the blob
+    Box3 b{{INFINITY, INFINITY, 0}, {-INFINITY, -INFINITY, 0}};
+    for (const auto& p : c->control_points)
+      for (int d = 0; d < 2; ++d) {
         b.min[d] = std::min(b.min[d], p[d]);
         b.max[d] = std::max(b.max[d], p[d]);
       }
-  };
-  std::visit(Overloaded{
-                 [&](const Circle& c) {
-                   b.min = {c.center[0] - c.radius, c.center[1] - c.radius, 0};
-                   b.max = {c.center[0] + c.radius, c.center[1] + c.radius, 0};
-                 },
-                 [&](const Ellipse& e) {
-                   const double co = std::cos(e.angle), si = std::sin(e.angle);
-                   const double ex = std::sqrt(sq(e.semi_axes[0] * co) + sq(e.semi_axes[1] * si));
-                   const double ey = std::sqrt(sq(e.semi_axes[0] * si) + sq(e.semi_axes[1] * co));
-                   b.min = {e.center[0] - ex, e.center[1] - ey, 0};
-                   b.max = {e.center[0] + ex, e.center[1] + ey, 0};
-                 },
-                 [&](const Polygon& p) { from_points(p.vertices); },
-                 [&](const NurbsCurve& c) { from_points(c.control_points); },
-                 [&](const Sphere& s) {
-                   for (int d = 0; d < 3; ++d) {
-                     b.min[d] = s.center[d] - s.radius;
-                     b.max[d] = s.center[d] + s.radius;
-                   }
-                 },
-                 [&](const Ellipsoid& e) {
-                   for (int d = 0; d < 3; ++d) {
-                     double ext = 0;
-                     for (int k = 0; k < 3; ++k) ext += sq(e.rotation[d][k] * e.semi_axes[k]);
-                     ext = std::sqrt(ext);
-                     b.min[d] = e.center[d] - ext;
-                     b.max[d] = e.center[d] + ext;
-                   }
-                 },
-                 [&](const Cylinder& c) {
-                   Vec3 u{c.end[0] - c.start[0], c.end[1] - c.start[1], c.end[2] - c.start[2]};
-                   const double len = std::sqrt(sq(u[0]) + sq(u[1]) + sq(u[2]));
-                   for (int d = 0; d < 3; ++d) {
-                     const double ext = c.radius * std::sqrt(std::max(0.0, 1 - sq(u[d] / len)));
-                     b.min[d] = std::min(c.start[d], c.end[d]) - ext;
-                     b.max[d] = std::max(c.start[d], c.end[d]) + ext;
-                   }
-                 },
-                 [&](const auto&) { throw std::invalid_argument("pack: unsupported shape"); },
-             },
-             shape);
-  return b;
+    return b;
+  }
+  if (std::holds_alternative<StlSurface>(shape) || std::holds_alternative<NurbsSurface>(shape))
+    throw std::invalid_argument("pack: unsupported shape");
+  return shape_bounding_box(shape);
 }
 
 double particle_measure(const Shape& shape) {
-  return std::visit(
-      Overloaded{
-          [](const Circle& c) { return M_PI * c.radius * c.radius; },
-          [](const Ellipse& e) { return M_PI * e.semi_axes[0] * e.semi_axes[1]; },
-          [](const Polygon& p) { return polyline_area(polygon_points(p)); },
-          [](const NurbsCurve& c) { return polyline_area(periodic_cubic_polyline(blob_control_points(c), 64)); },
-          [](const Sphere& s) { return 4.0 / 3.0 * M_PI * s.radius * s.radius * s.radius; },
-          [](const Ellipsoid& e) { return 4.0 / 3.0 * M_PI * e.semi_axes[0] * e.semi_axes[1] * e.semi_axes[2]; },
-          [](const Cylinder& c) {
-            const double len = std::sqrt(sq(c.end[0] - c.start[0]) + sq(c.end[1] - c.start[1]) +
-                                         sq(c.end[2] - c.start[2]));
-            return M_PI * c.radius * c.radius * len;
-          },
-          [](const auto&) -> double { throw std::invalid_argument("pack: unsupported shape"); },
-      },
-      shape);
+  if (const auto* c = std::get_if<NurbsCurve>(&shape))  // the packer's blobs, as the containment test sees them
+    return polyline_area(periodic_cubic_polyline(blob_control_points(*c), 64));
+  if (std::holds_alternative<StlSurface>(shape) || std::holds_alternative<NurbsSurface>(shape))
+    throw std::invalid_argument("pack: unsupported shape");
+  return shape_measure(shape);
 }
 
 ConvexBody particle_body(const Shape& shape) {

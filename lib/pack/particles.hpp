@@ -13,10 +13,11 @@
 
 namespace cisamr::pack {
 
-// Tight axis-aligned box (for NURBS: the box of the control points, which contains the curve).
-Box3 particle_box(const geometry::Shape& s, int dim);
+// Tight axis-aligned box (geometry::shape_bounding_box; for NURBS: the box of the control
+// points, which contains the curve).
+Box3 particle_box(const geometry::Shape& s);
 
-// Area (2D) or volume (3D). Cylinders: πr²·length.
+// Area (2D) or volume (3D): geometry::shape_measure (NURBS blobs: of their polyline).
 double particle_measure(const geometry::Shape& s);
 
 // The convex body used by the exact check (hull of points for non-convex shapes).

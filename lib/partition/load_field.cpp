@@ -11,36 +11,7 @@ namespace {
 
 using namespace geometry;
 
-template <class... F>
-struct Overloaded : F... { using F::operator()...; };
-template <class... F>
-Overloaded(F...) -> Overloaded<F...>;
-
 double sq(double x) { return x * x; }
-
-// Point on a NURBS curve (de Boor on homogeneous coordinates).
-Vec2 nurbs_point(const NurbsCurve& c, double u) {
-  const int p = c.degree;
-  const int ncp = static_cast<int>(c.control_points.size());
-  int k = p;
-  while (k < ncp - 1 && u >= c.knots[k + 1]) ++k;
-  double d[32][3];
-  for (int j = 0; j <= p; ++j) {
-    const int idx = k - p + j;
-    const double w = c.weights.empty() ? 1.0 : c.weights[idx];
-    d[j][0] = w * c.control_points[idx][0];
-    d[j][1] = w * c.control_points[idx][1];
-    d[j][2] = w;
-  }
-  for (int r = 1; r <= p; ++r)
-    for (int j = p; j >= r; --j) {
-      const int i = k - p + j;
-      const double den = c.knots[i + p - r + 1] - c.knots[i];
-      const double a = den > 0 ? (u - c.knots[i]) / den : 0;
-      for (int q = 0; q < 3; ++q) d[j][q] = (1 - a) * d[j - 1][q] + a * d[j][q];
-    }
-  return {d[p][0] / d[p][2], d[p][1] / d[p][2]};
-}
 
 class Accumulator {
  public:
@@ -116,203 +87,123 @@ class Accumulator {
   LoadField& f_;
 };
 
+// Cylinders keep their own midpoint quadrature (rings at the middle of equal slices, caps in
+// rings of equal area): geometry's cylinder samples lie on rings at t = i/n, which for fibres
+// ending on the lattice sit exactly on raster planes and put whole rings on one side.
+void add_cylinder(Accumulator& acc, const Cylinder& cy, double weight, double spacing) {
+  Vec3 u{cy.end[0] - cy.start[0], cy.end[1] - cy.start[1], cy.end[2] - cy.start[2]};
+  const double len = std::sqrt(sq(u[0]) + sq(u[1]) + sq(u[2]));
+  for (auto& v : u) v /= len;
+  // Two unit vectors perpendicular to the axis.
+  Vec3 helper = std::abs(u[0]) < 0.9 ? Vec3{1, 0, 0} : Vec3{0, 1, 0};
+  Vec3 e1{u[1] * helper[2] - u[2] * helper[1], u[2] * helper[0] - u[0] * helper[2], u[0] * helper[1] - u[1] * helper[0]};
+  const double n1 = std::sqrt(sq(e1[0]) + sq(e1[1]) + sq(e1[2]));
+  for (auto& v : e1) v /= n1;
+  const Vec3 e2{u[1] * e1[2] - u[2] * e1[1], u[2] * e1[0] - u[0] * e1[2], u[0] * e1[1] - u[1] * e1[0]};
+  const double r = cy.radius;
+  const int nphi = std::max(32, static_cast<int>(std::ceil(2 * M_PI * r / spacing)));
+  const int nt = std::max(4, static_cast<int>(std::ceil(len / spacing)));
+  const double w_lat = weight * 2 * M_PI * r * len / (double(nphi) * nt);
+  for (int i = 0; i < nt; ++i) {
+    const double t = (i + 0.5) / nt * len;
+    for (int j = 0; j < nphi; ++j) {
+      const double phi = 2 * M_PI * (j + 0.5) / nphi;
+      Vec3 x{};
+      for (int k = 0; k < 3; ++k)
+        x[k] = cy.start[k] + t * u[k] + r * (std::cos(phi) * e1[k] + std::sin(phi) * e2[k]);
+      acc.add_point(x, w_lat);
+    }
+  }
+  const int nr = std::max(2, static_cast<int>(std::ceil(r / spacing)));
+  for (int cap = 0; cap < 2; ++cap) {
+    const Vec3& o = cap == 0 ? cy.start : cy.end;
+    for (int k = 0; k < nr; ++k) {
+      const double r0 = r * k / nr, r1 = r * (k + 1) / nr, rm = 0.5 * (r0 + r1);
+      const int np = std::max(8, static_cast<int>(std::ceil(2 * M_PI * rm / spacing)));
+      const double w = weight * M_PI * (r1 * r1 - r0 * r0) / np;
+      for (int j = 0; j < np; ++j) {
+        const double phi = 2 * M_PI * (j + 0.5) / np;
+        Vec3 x{};
+        for (int q = 0; q < 3; ++q) x[q] = o[q] + rm * (std::cos(phi) * e1[q] + std::sin(phi) * e2[q]);
+        acc.add_point(x, w);
+      }
+    }
+  }
+}
+
+// geometry's 3D samples are evenly spread over the boundary, except on ellipsoids: Fibonacci
+// points of the unit sphere, stretched, so the area around body point b grows with
+// abc·|(b₀/a², b₁/b², b₂/c²)|. Returns the area each sample stands for.
+std::vector<double> sample_areas(const Shape& shape, const std::vector<Vec3>& pts) {
+  const double measure = shape_boundary_measure(shape);
+  std::vector<double> area(pts.size(), measure / pts.size());
+  if (const auto* e = std::get_if<Ellipsoid>(&shape)) {
+    double total = 0;
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+      double stretch = 0;
+      for (int j = 0; j < 3; ++j) {
+        double body = 0;
+        for (int k = 0; k < 3; ++k) body += e->rotation[k][j] * (pts[i][k] - e->center[k]);
+        stretch += sq(body / sq(e->semi_axes[j]));
+      }
+      total += area[i] = std::sqrt(stretch);
+    }
+    for (double& a : area) a *= measure / total;
+  }
+  return area;
+}
+
+// Spreads R^M · |A_k| over the raster: the samples of geometry::shape_boundary_samples,
+// weighted so that their total is the exact shape_boundary_measure (circles: exact arcs;
+// cylinders: add_cylinder).
 void add_inclusion(Accumulator& acc, const Inclusion& inc, double weight, double spacing) {
-  std::visit(
-      Overloaded{
-          [&](const Circle& c) { acc.add_circle(c, weight); },
-          [&](const Ellipse& e) {
-            const double a = e.semi_axes[0], b = e.semi_axes[1];
-            const double per = ellipse_perimeter(a, b);
-            const int n = std::max(256, static_cast<int>(std::ceil(per / spacing)));
-            std::vector<Vec2> pts;
-            const double co = std::cos(e.angle), si = std::sin(e.angle);
-            for (int i = 0; i < n; ++i) {
-              const double t = 2 * M_PI * i / n;
-              const double x = a * std::cos(t), y = b * std::sin(t);
-              pts.push_back({e.center[0] + co * x - si * y, e.center[1] + si * x + co * y});
-            }
-            double len = 0;
-            for (int i = 0; i < n; ++i) len += std::hypot(pts[(i + 1) % n][0] - pts[i][0], pts[(i + 1) % n][1] - pts[i][1]);
-            acc.add_polyline(pts, weight, spacing, per / len);
-          },
-          [&](const Polygon& p) { acc.add_polyline(p.vertices, weight, spacing, 1.0); },
-          [&](const NurbsCurve& c) {
-            const int n = std::max(512, static_cast<int>(c.control_points.size()) * 64);
-            acc.add_polyline(nurbs_polyline(c, n), weight, spacing, 1.0);
-          },
-          [&](const Sphere& s) {
-            const double area = 4 * M_PI * sq(s.radius);
-            const auto n = std::max<std::int64_t>(64, static_cast<std::int64_t>(std::ceil(area / sq(spacing))));
-            const double golden = M_PI * (3 - std::sqrt(5.0));
-            for (std::int64_t i = 0; i < n; ++i) {
-              const double z = 1 - (2 * i + 1.0) / n, rr = std::sqrt(1 - z * z), phi = golden * i;
-              acc.add_point({s.center[0] + s.radius * rr * std::cos(phi), s.center[1] + s.radius * rr * std::sin(phi),
-                             s.center[2] + s.radius * z},
-                            weight * area / n);
-            }
-          },
-          [&](const Ellipsoid& e) {
-            const double a = e.semi_axes[0], b = e.semi_axes[1], c = e.semi_axes[2];
-            const double big = std::max({a, b, c});
-            const int nu = std::max(32, static_cast<int>(std::ceil(2 * big / spacing)));
-            const int nphi = std::max(64, static_cast<int>(std::ceil(2 * M_PI * big / spacing)));
-            const double du = 2.0 / nu, dphi = 2 * M_PI / nphi;
-            for (int i = 0; i < nu; ++i) {
-              const double u = -1 + (i + 0.5) * du, s = std::sqrt(1 - u * u);
-              for (int j = 0; j < nphi; ++j) {
-                const double phi = (j + 0.5) * dphi, cp = std::cos(phi), sp = std::sin(phi);
-                const Vec3 pu{-a * u / s * cp, -b * u / s * sp, c};
-                const Vec3 pp{-a * s * sp, b * s * cp, 0};
-                const double dA = std::sqrt(sq(pu[1] * pp[2] - pu[2] * pp[1]) + sq(pu[2] * pp[0] - pu[0] * pp[2]) +
-                                            sq(pu[0] * pp[1] - pu[1] * pp[0])) * du * dphi;
-                const Vec3 body{a * s * cp, b * s * sp, c * u};
-                Vec3 x = e.center;
-                for (int r = 0; r < 3; ++r)
-                  for (int k = 0; k < 3; ++k) x[r] += e.rotation[r][k] * body[k];
-                acc.add_point(x, weight * dA);
-              }
-            }
-          },
-          [&](const Cylinder& cy) {
-            Vec3 u{cy.end[0] - cy.start[0], cy.end[1] - cy.start[1], cy.end[2] - cy.start[2]};
-            const double len = std::sqrt(sq(u[0]) + sq(u[1]) + sq(u[2]));
-            for (auto& v : u) v /= len;
-            // Two unit vectors perpendicular to the axis.
-            Vec3 helper = std::abs(u[0]) < 0.9 ? Vec3{1, 0, 0} : Vec3{0, 1, 0};
-            Vec3 e1{u[1] * helper[2] - u[2] * helper[1], u[2] * helper[0] - u[0] * helper[2], u[0] * helper[1] - u[1] * helper[0]};
-            const double n1 = std::sqrt(sq(e1[0]) + sq(e1[1]) + sq(e1[2]));
-            for (auto& v : e1) v /= n1;
-            const Vec3 e2{u[1] * e1[2] - u[2] * e1[1], u[2] * e1[0] - u[0] * e1[2], u[0] * e1[1] - u[1] * e1[0]};
-            const double r = cy.radius;
-            const int nphi = std::max(32, static_cast<int>(std::ceil(2 * M_PI * r / spacing)));
-            const int nt = std::max(4, static_cast<int>(std::ceil(len / spacing)));
-            const double w_lat = weight * 2 * M_PI * r * len / (double(nphi) * nt);
-            for (int i = 0; i < nt; ++i) {
-              const double t = (i + 0.5) / nt * len;
-              for (int j = 0; j < nphi; ++j) {
-                const double phi = 2 * M_PI * (j + 0.5) / nphi;
-                Vec3 x{};
-                for (int k = 0; k < 3; ++k)
-                  x[k] = cy.start[k] + t * u[k] + r * (std::cos(phi) * e1[k] + std::sin(phi) * e2[k]);
-                acc.add_point(x, w_lat);
-              }
-            }
-            const int nr = std::max(2, static_cast<int>(std::ceil(r / spacing)));
-            for (int cap = 0; cap < 2; ++cap) {
-              const Vec3& o = cap == 0 ? cy.start : cy.end;
-              for (int k = 0; k < nr; ++k) {
-                const double r0 = r * k / nr, r1 = r * (k + 1) / nr, rm = 0.5 * (r0 + r1);
-                const int np = std::max(8, static_cast<int>(std::ceil(2 * M_PI * rm / spacing)));
-                const double w = weight * M_PI * (r1 * r1 - r0 * r0) / np;
-                for (int j = 0; j < np; ++j) {
-                  const double phi = 2 * M_PI * (j + 0.5) / np;
-                  Vec3 x{};
-                  for (int q = 0; q < 3; ++q) x[q] = o[q] + rm * (std::cos(phi) * e1[q] + std::sin(phi) * e2[q]);
-                  acc.add_point(x, w);
-                }
-              }
-            }
-          },
-          [&](const auto& s) {  // STL and NURBS surfaces: samples from the geometry module
-            const Shape shape = s;
-            const auto pts = shape_boundary_samples(shape, spacing);
-            if (pts.empty()) return;
-            const double each = weight * shape_boundary_measure(shape) / pts.size();
-            for (const auto& p : pts) acc.add_point(p, each);
-          },
-      },
-      inc.shape);
+  if (const auto* c = std::get_if<Circle>(&inc.shape)) return acc.add_circle(*c, weight);
+  if (const auto* c = std::get_if<Cylinder>(&inc.shape)) return add_cylinder(acc, *c, weight, spacing);
+  if (shape_dimension(inc.shape) == 2) {
+    // A closed polyline scaled to the exact perimeter. Curves are sampled 8× finer than
+    // `spacing` so that chord lengths match arc lengths (to ~1e-4) before that scaling.
+    const bool curved = !std::holds_alternative<Polygon>(inc.shape);
+    const auto pts = shape_boundary_samples(inc.shape, curved ? spacing / 8 : spacing);
+    std::vector<Vec2> poly;
+    double length = 0;
+    for (std::size_t i = 0, n = pts.size(); i < n; ++i) {
+      poly.push_back({pts[i][0], pts[i][1]});
+      length += std::hypot(pts[(i + 1) % n][0] - pts[i][0], pts[(i + 1) % n][1] - pts[i][1]);
+    }
+    return acc.add_polyline(poly, weight, spacing, shape_boundary_measure(inc.shape) / length);
+  }
+  const auto pts = shape_boundary_samples(inc.shape, spacing);
+  if (pts.empty()) return;
+  const std::vector<double> area = sample_areas(inc.shape, pts);
+  for (std::size_t i = 0; i < pts.size(); ++i) acc.add_point(pts[i], weight * area[i]);
 }
 
 }  // namespace
-
-std::vector<Vec2> nurbs_polyline(const NurbsCurve& c, int samples) {
-  const int p = c.degree;
-  const int ncp = static_cast<int>(c.control_points.size());
-  const double u0 = c.knots[p], u1 = c.knots[ncp];
-  std::vector<Vec2> pts;
-  for (int i = 0; i < samples; ++i) pts.push_back(nurbs_point(c, u0 + (u1 - u0) * i / samples));
-  return pts;
-}
-
-double ellipse_perimeter(double a, double b) {
-  // C = 2π/M(a,b) · (a² − Σ_{n≥0} 2^{n−1} c_n²), c_0² = a² − b².
-  double an = std::max(a, b), bn = std::min(a, b);
-  double sum = 0.5 * (an * an - bn * bn), pow2 = 0.5;
-  const double a2 = an * an;
-  for (int i = 0; i < 64 && an - bn > 1e-15 * an; ++i) {
-    const double cn = 0.5 * (an - bn);
-    const double next_a = 0.5 * (an + bn);
-    bn = std::sqrt(an * bn);
-    an = next_a;
-    pow2 *= 2;
-    sum += pow2 * cn * cn;
-  }
-  return 2 * M_PI / an * (a2 - sum);
-}
 
 int effective_levels(const SceneDesc& scene, const Inclusion& inc) {
   return std::max(1, inc.levels > 0 ? inc.levels : scene.levels);
 }
 
-Box3 inclusion_box(const Shape& shape, int dim) {
-  Box3 b{};
-  b.min = {INFINITY, INFINITY, dim == 2 ? 0.0 : INFINITY};
-  b.max = {-INFINITY, -INFINITY, dim == 2 ? 0.0 : -INFINITY};
-  auto grow = [&](double x, double y, double z) {
-    const double p[3] = {x, y, z};
-    for (int d = 0; d < dim; ++d) {
-      b.min[d] = std::min(b.min[d], p[d]);
-      b.max[d] = std::max(b.max[d], p[d]);
-    }
+Box3 inclusion_box(const Shape& shape) {
+  // NURBS: the box of the control points (it contains the curve or surface).
+  auto control_box = [](const auto& points, Box3& b) {
+    for (const auto& p : points)
+      for (std::size_t d = 0; d < p.size(); ++d) {
+        b.min[d] = std::min(b.min[d], p[d]);
+        b.max[d] = std::max(b.max[d], p[d]);
+      }
   };
-  std::visit(Overloaded{
-                 [&](const Circle& c) {
-                   grow(c.center[0] - c.radius, c.center[1] - c.radius, 0);
-                   grow(c.center[0] + c.radius, c.center[1] + c.radius, 0);
-                 },
-                 [&](const Ellipse& e) {
-                   const double co = std::cos(e.angle), si = std::sin(e.angle);
-                   const double ex = std::sqrt(sq(e.semi_axes[0] * co) + sq(e.semi_axes[1] * si));
-                   const double ey = std::sqrt(sq(e.semi_axes[0] * si) + sq(e.semi_axes[1] * co));
-                   grow(e.center[0] - ex, e.center[1] - ey, 0);
-                   grow(e.center[0] + ex, e.center[1] + ey, 0);
-                 },
-                 [&](const Polygon& p) { for (const auto& v : p.vertices) grow(v[0], v[1], 0); },
-                 [&](const NurbsCurve& c) { for (const auto& v : c.control_points) grow(v[0], v[1], 0); },
-                 [&](const Sphere& s) {
-                   grow(s.center[0] - s.radius, s.center[1] - s.radius, s.center[2] - s.radius);
-                   grow(s.center[0] + s.radius, s.center[1] + s.radius, s.center[2] + s.radius);
-                 },
-                 [&](const Ellipsoid& e) {
-                   Vec3 ext{};
-                   for (int d = 0; d < 3; ++d) {
-                     for (int k = 0; k < 3; ++k) ext[d] += sq(e.rotation[d][k] * e.semi_axes[k]);
-                     ext[d] = std::sqrt(ext[d]);
-                   }
-                   grow(e.center[0] - ext[0], e.center[1] - ext[1], e.center[2] - ext[2]);
-                   grow(e.center[0] + ext[0], e.center[1] + ext[1], e.center[2] + ext[2]);
-                 },
-                 [&](const Cylinder& c) {
-                   Vec3 u{c.end[0] - c.start[0], c.end[1] - c.start[1], c.end[2] - c.start[2]};
-                   const double len = std::sqrt(sq(u[0]) + sq(u[1]) + sq(u[2]));
-                   Vec3 ext{};
-                   for (int d = 0; d < 3; ++d) ext[d] = c.radius * std::sqrt(std::max(0.0, 1 - sq(u[d] / len)));
-                   for (const Vec3* p : {&c.start, &c.end}) {
-                     grow((*p)[0] - ext[0], (*p)[1] - ext[1], (*p)[2] - ext[2]);
-                     grow((*p)[0] + ext[0], (*p)[1] + ext[1], (*p)[2] + ext[2]);
-                   }
-                 },
-                 [&](const NurbsSurface& s) {
-                   for (const auto& patch : s.patches)
-                     for (const auto& v : patch.control_points) grow(v[0], v[1], v[2]);
-                 },
-                 [&](const StlSurface& s) {
-                   for (const auto& p : shape_boundary_samples(Shape{s}, 1e300)) grow(p[0], p[1], p[2]);
-                 },
-             },
-             shape);
-  return b;
+  if (const auto* c = std::get_if<NurbsCurve>(&shape)) {
+    Box3 b{{INFINITY, INFINITY, 0}, {-INFINITY, -INFINITY, 0}};
+    control_box(c->control_points, b);
+    return b;
+  }
+  if (const auto* s = std::get_if<NurbsSurface>(&shape)) {
+    Box3 b{{INFINITY, INFINITY, INFINITY}, {-INFINITY, -INFINITY, -INFINITY}};
+    for (const auto& patch : s->patches) control_box(patch.control_points, b);
+    return b;
+  }
+  return shape_bounding_box(shape);
 }
 
 double LoadField::box_load(const std::array<std::int64_t, 3>& lo, const std::array<std::int64_t, 3>& hi) const {

@@ -40,13 +40,8 @@ LoadField build_load_field(const geometry::SceneDesc& scene, const PartitionOpti
 // without refinement still costs its cut elements).
 int effective_levels(const geometry::SceneDesc& scene, const geometry::Inclusion& inc);
 
-// Axis-aligned bounding box of any scene shape (STL and NURBS surfaces: of their samples).
-Box3 inclusion_box(const geometry::Shape& s, int dim);
-
-// Points on a NURBS curve, uniformly in the parameter over its valid range.
-std::vector<Vec2> nurbs_polyline(const geometry::NurbsCurve& c, int samples);
-
-// Exact perimeter of an ellipse (arithmetic–geometric mean).
-double ellipse_perimeter(double a, double b);
+// Axis-aligned bounding box of any scene shape (geometry::shape_bounding_box; NURBS: the box
+// of the control points).
+Box3 inclusion_box(const geometry::Shape& s);
 
 }  // namespace cisamr::partition

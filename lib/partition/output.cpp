@@ -6,6 +6,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "geometry/shapes.hpp"
 #include "partition/load_field.hpp"
 #include "partition/partition.hpp"
 
@@ -47,31 +48,38 @@ struct Panel {  // one drawing: domain x/y → pixels, y up
   double py(double y) const { return height_px - (y - y0) * scale; }
 };
 
-void draw_boxes(std::ostringstream& s, const Partition& p, const Panel& pan, double z) {
-  const double maxl = p.max_load();
+struct PixelRect {  // a part box in the panel's pixels
+  double x, y, w, h;
+  std::string svg_attributes() const {
+    return "x=\"" + fmt(x) + "\" y=\"" + fmt(y) + "\" width=\"" + fmt(w) + "\" height=\"" + fmt(h) + "\"";
+  }
+};
+
+// The parts cut by the plane z (all of them in 2D), with their rectangles.
+template <class Draw>
+void for_each_part_rect(const Partition& p, const Panel& pan, double z, Draw draw) {
   for (const auto& part : p.parts) {
     if (p.dimension == 3 && (z < part.box.min[2] || z > part.box.max[2])) continue;
-    const double x = pan.px(part.box.min[0]), y = pan.py(part.box.max[1]);
-    const double w = (part.box.max[0] - part.box.min[0]) * pan.scale;
-    const double h = (part.box.max[1] - part.box.min[1]) * pan.scale;
-    s << "<rect x=\"" << fmt(x) << "\" y=\"" << fmt(y) << "\" width=\"" << fmt(w) << "\" height=\"" << fmt(h)
-      << "\" fill=\"" << heat(part.load, maxl) << "\" stroke=\"none\"><title>part " << part.id << " load "
-      << fmt(part.load) << "</title></rect>\n";
+    draw(part, PixelRect{pan.px(part.box.min[0]), pan.py(part.box.max[1]),
+                         (part.box.max[0] - part.box.min[0]) * pan.scale, (part.box.max[1] - part.box.min[1]) * pan.scale});
   }
 }
 
+void draw_boxes(std::ostringstream& s, const Partition& p, const Panel& pan, double z) {
+  const double maxl = p.max_load();
+  for_each_part_rect(p, pan, z, [&](const Part& part, const PixelRect& r) {
+    s << "<rect " << r.svg_attributes() << " fill=\"" << heat(part.load, maxl) << "\" stroke=\"none\"><title>part "
+      << part.id << " load " << fmt(part.load) << "</title></rect>\n";
+  });
+}
+
 void draw_outlines(std::ostringstream& s, const Partition& p, const Panel& pan, double z) {
-  for (const auto& part : p.parts) {
-    if (p.dimension == 3 && (z < part.box.min[2] || z > part.box.max[2])) continue;
-    const double x = pan.px(part.box.min[0]), y = pan.py(part.box.max[1]);
-    const double w = (part.box.max[0] - part.box.min[0]) * pan.scale;
-    const double h = (part.box.max[1] - part.box.min[1]) * pan.scale;
-    s << "<rect x=\"" << fmt(x) << "\" y=\"" << fmt(y) << "\" width=\"" << fmt(w) << "\" height=\"" << fmt(h)
-      << "\" fill=\"none\" stroke=\"#1040a0\" stroke-width=\"1.5\"/>\n";
-    s << "<text x=\"" << fmt(x + w / 2) << "\" y=\"" << fmt(y + h / 2) << "\" font-size=\""
-      << fmt(std::clamp(std::min(w, h) / 4, 6.0, 16.0)) << "\" text-anchor=\"middle\" fill=\"#1040a0\">" << part.id
+  for_each_part_rect(p, pan, z, [&](const Part& part, const PixelRect& r) {
+    s << "<rect " << r.svg_attributes() << " fill=\"none\" stroke=\"#1040a0\" stroke-width=\"1.5\"/>\n";
+    s << "<text x=\"" << fmt(r.x + r.w / 2) << "\" y=\"" << fmt(r.y + r.h / 2) << "\" font-size=\""
+      << fmt(std::clamp(std::min(r.w, r.h) / 4, 6.0, 16.0)) << "\" text-anchor=\"middle\" fill=\"#1040a0\">" << part.id
       << "</text>\n";
-  }
+  });
 }
 
 void draw_inclusions_2d(std::ostringstream& s, const SceneDesc& scene, const Panel& pan) {
@@ -88,7 +96,9 @@ void draw_inclusions_2d(std::ostringstream& s, const SceneDesc& scene, const Pan
     } else {
       std::vector<Vec2> pts;
       if (auto* poly = std::get_if<Polygon>(&inc.shape)) pts = poly->vertices;
-      if (auto* n = std::get_if<NurbsCurve>(&inc.shape)) pts = nurbs_polyline(*n, 64);
+      if (std::holds_alternative<NurbsCurve>(inc.shape))
+        for (const Vec3& q : shape_boundary_samples(inc.shape, shape_boundary_measure(inc.shape) / 64))
+          pts.push_back({q[0], q[1]});
       if (pts.empty()) continue;
       s << "<polygon points=\"";
       for (const auto& q : pts) s << fmt(pan.px(q[0])) << "," << fmt(pan.py(q[1])) << " ";

@@ -352,7 +352,7 @@ Partition assemble(const LoadField& f, const geometry::SceneDesc& scene, std::ve
     });
   // Inclusions whose bounding box (or a periodic image of it) meets the closed part box.
   for (std::size_t k = 0; k < scene.inclusions.size(); ++k) {
-    const Box3 b = inclusion_box(scene.inclusions[k].shape, f.dim);
+    const Box3 b = inclusion_box(scene.inclusions[k].shape);
     for (auto& part : p.parts) {
       bool hit = false;
       for (int sx = -1; sx <= 1 && !hit; ++sx)

@@ -109,7 +109,7 @@ constexpr FacePattern face_pattern(Kind kind, unsigned edge_mask, int face, int 
       add(q.m_sp, q.p, q.q), add(q.m_sp, q.q, q.m_sq);
     else
       add(q.m_sp, q.p, q.m_sq), add(q.p, q.q, q.m_sq);
-  } else if (false && is_right_face(kind, face)) {
+  } else if (is_right_face(kind, face)) {
     // Fan from the hypotenuse midpoint; the apex (vertex 0) is the right-angle corner.
     int i0 = 0;
     while (v[i0] != 0) ++i0;

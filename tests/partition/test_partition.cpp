@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/error.hpp"
+#include "geometry/shapes.hpp"
 #include "pack/pack.hpp"
 #include "partition/load_field.hpp"
 #include "partition/partition.hpp"
@@ -108,10 +109,11 @@ TEST(PartitionLoad, ClippedOutsideAndWrappedWhenPeriodic) {
   EXPECT_NEAR(partition::total_load(s), 2 * M_PI * 2, 1e-9);
 }
 
-TEST(PartitionLoad, EllipsePerimeterAgm) {
-  EXPECT_NEAR(partition::ellipse_perimeter(1, 1), 2 * M_PI, 1e-14);
-  EXPECT_NEAR(partition::ellipse_perimeter(2, 1), 9.688448220547675, 1e-12);
-  EXPECT_NEAR(partition::ellipse_perimeter(1, 2), 9.688448220547675, 1e-12);
+TEST(PartitionLoad, EllipsePerimeterIsExact) {  // the |A_k| the load field scales its samples to
+  auto perimeter = [](double a, double b) { return shape_boundary_measure(Ellipse{{3, 4}, {a, b}, 0.7}); };
+  EXPECT_NEAR(perimeter(1, 1), 2 * M_PI, 1e-14);
+  EXPECT_NEAR(perimeter(2, 1), 9.688448220547675, 1e-12);
+  EXPECT_NEAR(perimeter(1, 2), 9.688448220547675, 1e-12);
 }
 
 TEST(Partition, TilesTheDomainOnTheLattice2D) {

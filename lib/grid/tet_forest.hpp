@@ -1,0 +1,74 @@
+#pragma once
+// A forest of tetrahedra over a range of coarse cubes: the 3D background grid (five tets
+// per cube, tet_lattice.hpp) and its nested-honeycomb refinements. Tets live in one flat
+// array; the 5 roots of coarse cube (ci, cj, ck) are consecutive (local 0..4), and the
+// 7 (corner tet) or 12 (regular tet) children of a tet are consecutive, in the order of
+// tet::kCornerChildren / tet::kRegularChildren. Every tet is a tet of its level's
+// honeycomb, identified by its TetCode; everything here depends only on those codes
+// (lattice keys), never on the order in which tets were refined.
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "grid/tet_lattice.hpp"
+
+namespace cisamr::grid {
+
+class TetForest {
+ public:
+  struct Tet {
+    std::int32_t first_child = -1;  // -1: leaf
+    std::int32_t parent = -1;       // -1: root
+    std::array<std::int32_t, 3> cube{};  // min corner of its cube, level coordinates
+    std::uint8_t level = 0;
+    std::uint8_t local = 0;  // 0: regular tet, 1..4: corner tets of the cube
+  };
+
+  // Throws MeshingError when the range is outside the domain or the lattice does not fit
+  // the 64-bit key (require_key3).
+  TetForest(const Lattice3& lattice, const CellRange<3>& range);
+
+  const Lattice3& lattice() const { return lattice_; }
+  const CellRange<3>& range() const { return range_; }
+  std::size_t size() const { return tets_.size(); }
+  const Tet& tet(std::int32_t t) const { return tets_[static_cast<std::size_t>(t)]; }
+  bool is_leaf(std::int32_t t) const { return tets_[static_cast<std::size_t>(t)].first_child < 0; }
+  tet::Kind kind(std::int32_t t) const { return kind_of_local(tet(t).local); }
+  int child_count(std::int32_t t) const { return tet::child_count(kind(t)); }
+  std::int32_t root_count() const { return root_count_; }
+  // Root `local` (0..4) of global coarse cube (ci, cj, ck), or -1 outside the range.
+  std::int32_t root(std::int64_t ci, std::int64_t cj, std::int64_t ck, int local) const;
+  TetCode code(std::int32_t t) const {
+    const Tet& x = tet(t);
+    return TetCode{{x.cube[0], x.cube[1], x.cube[2]}, x.local};
+  }
+
+  // Vertices on the finest lattice, positively oriented (corner tets: right-angle apex
+  // first), and their keys.
+  std::array<LatticePoint3, 4> fine_vertices(std::int32_t t) const;
+  std::array<LatticeKey3, 4> vertex_keys(std::int32_t t) const;
+  // World coordinates of a finest-lattice point.
+  Vec3 position(const LatticePoint3& p) const {
+    return {lattice_.coordinate(0, p[0]), lattice_.coordinate(1, p[1]), lattice_.coordinate(2, p[2])};
+  }
+
+  // The tet on the path to honeycomb tet `code` of `level` with the largest level ≤
+  // `level`: a leaf containing it (maybe coarser) or the non-leaf exactly at `level`.
+  // -1 when that tet is outside the range. Point location on the nested honeycombs: the
+  // descent follows the target's centroid, which lies inside exactly one tet per level.
+  std::int32_t find(int level, const TetCode& target) const;
+  // find() of the honeycomb tet of t's level across face f (opposite vertex f): the
+  // neighbour at t's level, a coarser leaf, or -1 outside the range.
+  std::int32_t face_neighbour(std::int32_t t, int face) const;
+
+  // Splits leaf t into its 7 or 12 children; returns the index of the first child.
+  std::int32_t refine(std::int32_t t);
+
+ private:
+  Lattice3 lattice_;
+  CellRange<3> range_;
+  std::int32_t root_count_ = 0;
+  std::vector<Tet> tets_;
+};
+
+}  // namespace cisamr::grid
