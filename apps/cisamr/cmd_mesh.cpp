@@ -1,6 +1,12 @@
-// cisamr mesh SCENE -o OUT.{vtu,msh,inp,mesh} [--report R.json] [--svg PICTURE.svg]
+// cisamr mesh SCENE -o OUT.{vtu,pvtu,msh,inp,mesh} [--partitions N] [--gather] [--report R.json]
+//             [--svg PICTURE.svg]
+// Without --partitions and outside mpiexec: the sequential mesher, as before. With
+// --partitions N, or under mpiexec -n P: the parallel mesher of lib/parallel (Algorithm 2),
+// through MPI or, on one process, through the serial Comm.
 #include <chrono>
+#include <cinttypes>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -13,6 +19,11 @@
 #include "io/mesh_svg.hpp"
 #include "io/scene_io.hpp"
 #include "mesh/metrics.hpp"
+#include "parallel/checksum.hpp"
+#include "parallel/collective.hpp"
+#include "parallel/distributed.hpp"
+#include "parallel/output.hpp"
+#include "parallel/session.hpp"
 #include "pipeline/pipeline.hpp"
 #include "quality/quality.hpp"
 
@@ -24,10 +35,48 @@ struct MeshArgs {
   double alpha = 0.5;
   int extra_levels = 3;
   double bound = 0;  // 0: the dimension's bound
+  int partitions = 0;  // 0: not given (sequential outside mpiexec, one per rank inside)
+  bool gather = false;
+  bool fixed_ghost = false;  // the fixed 3-cell inclusion margin instead of the level-aware one
+  int closure_rounds = -1;   // experiment: cut the ghost closure short (-1: exact)
 };
 
 void progress(const GlobalFlags& flags, const char* what) {
   if (show_progress(flags)) std::fprintf(stderr, "cisamr: %s\n", what);
+}
+
+std::string checksum_text(std::uint64_t sum) {
+  char text[20];
+  std::snprintf(text, sizeof text, "%016" PRIx64, sum);
+  return text;
+}
+
+nlohmann::json aspect_json(const quality::AspectStats& aspect) {
+  return {{"max", aspect.max},
+          {"mean", aspect.mean},
+          {"bound", aspect.bound},
+          {"above_bound", aspect.above_bound},
+          {"bin_edges", aspect.bin_edges},
+          {"histogram", aspect.histogram},
+          {"min_angle_deg", aspect.min_angle_deg},
+          {"max_angle_deg", aspect.max_angle_deg}};
+}
+
+nlohmann::json algorithm_json(const MeshArgs& args, const pipeline::Stats& stats) {
+  return {{"alpha", args.alpha},
+          {"extra_levels", args.extra_levels},
+          {"coarse_cells", stats.coarse_cells},
+          {"leaves", stats.leaves},
+          {"refinements", stats.refinements},
+          {"lattice_nodes", stats.lattice_nodes},
+          {"snapped_nodes", stats.snapped_nodes},
+          {"cut_quads", stats.cut_quads},
+          {"double_diagonal_splits", stats.double_diagonal},
+          {"hanging_node_cells", stats.hanging_cells},
+          {"unresolved_quads", stats.unresolved},
+          {"finest_level", stats.max_level},
+          {"collapsed_features", stats.collapsed},
+          {"max_collapse_deviation", stats.max_collapse_deviation}};
 }
 
 nlohmann::json report_json(const MeshArgs& args, const geometry::SceneDesc& scene, const mesh::Mesh2& m,
@@ -82,7 +131,167 @@ nlohmann::json report_json(const MeshArgs& args, const geometry::SceneDesc& scen
   j["total_s"] = total_seconds;
   j["ranks"] = 1;
   j["partitions"] = nlohmann::json::array({{{"partition", 0}, {"rank", 0}, {"elements", m.cell_count()}}});
+  j["checksum"] = checksum_text(parallel::mesh_checksum2(m));
   return j;
+}
+
+// The parallel mesher (lib/parallel). Collective: every rank runs all of it; only rank 0
+// prints and writes the report. Errors are agreed between ranks inside lib/parallel.
+void run_parallel(const MeshArgs& args, const GlobalFlags& flags, int& exit_code) {
+  const Comm& comm = parallel::world();
+  const bool root = comm.rank() == 0;
+  const auto start = std::chrono::steady_clock::now();
+  namespace fs = std::filesystem;
+  const std::string extension = fs::path(args.output).extension().string();
+  // Pieces + .pvtu for a .pvtu name, or for .vtu on several ranks without --gather.
+  const bool pieces = extension == ".pvtu" || (extension == ".vtu" && comm.size() > 1 && !args.gather);
+  const std::string output = pieces ? fs::path(args.output).replace_extension(".pvtu").string() : args.output;
+  parallel::run_collectively(comm, [&] {
+    if (pieces && args.gather)
+      throw InputError(args.output, "", "--gather writes one file: use .vtu, .msh, .inp or .mesh");
+    if (!pieces) io::mesh_format_of(output);
+    if (!pieces && comm.size() > 1 && !args.gather)
+      throw InputError(args.output, "", "a parallel run writes .pvtu pieces; add --gather to write one " + extension +
+                                            " file on rank 0");
+  });
+  const bool show = root && show_progress(flags);
+  if (show) std::fprintf(stderr, "cisamr: meshing on %d rank(s)\n", comm.size());
+
+  parallel::MeshOptions options;
+  options.pipeline.alpha = args.alpha;
+  options.pipeline.extra_levels = args.extra_levels;
+  options.partitions = args.partitions > 0 ? args.partitions : comm.size();
+  options.ghost.level_aware = !args.fixed_ghost;
+  options.ghost.max_closure_rounds = args.closure_rounds;
+  parallel::DistributedMesh2 dm = parallel::mesh2_distributed(comm, args.scene, options);
+  const mesh::Mesh2& piece = dm.piece.mesh;
+
+  const double bound = args.bound > 0 ? args.bound : 3.0;
+  quality::AspectStats aspect;
+  std::vector<std::pair<std::int64_t, double>> per_phase;  // elements, measure
+  {
+    ScopedPhase timer(&dm.times, "quality");
+    aspect = parallel::merge_aspect_statistics(comm, quality::aspect_statistics(piece, bound));
+    for (const auto& ph : dm.phases) {
+      std::int64_t count = 0;
+      double area = 0;
+      for (std::size_t c = 0; c < piece.cell_count(); ++c)
+        if (piece.cell_phase[c] == ph.id) {
+          ++count;
+          const LocalId* n = piece.cell(c);
+          area += mesh::signed_area(piece.point(n[0]), piece.point(n[1]), piece.point(n[2]));
+        }
+      per_phase.emplace_back(comm.allreduce_sum(count), comm.allreduce_sum(area));
+    }
+  }
+  const std::uint64_t checksum = parallel::mesh_checksum2(comm, piece);
+  if (show) std::fprintf(stderr, "cisamr: writing the mesh\n");
+  {
+    ScopedPhase timer(&dm.times, "write");
+    // One rank: its piece is already the gathered mesh (nodes in global-id order).
+    mesh::Mesh2 gathered_copy;
+    if ((!pieces || !args.svg.empty()) && comm.size() > 1) gathered_copy = parallel::gather_mesh2(comm, dm.piece);
+    const mesh::Mesh2& gathered = comm.size() > 1 ? gathered_copy : piece;
+    if (pieces)
+      parallel::write_pvtu2(comm, output, piece);
+    else
+      parallel::write_gathered2(comm, output, gathered, dm.phases);
+    if (!args.svg.empty())
+      parallel::run_collectively(comm, [&] {
+        if (!root) return;
+        geometry::SceneDesc header;
+        header.phases = dm.phases;
+        header.domain_min = {dm.domain.min[0], dm.domain.min[1], 0};
+        header.domain_max = {dm.domain.max[0], dm.domain.max[1], 0};
+        io::write_mesh_svg(args.svg, gathered, header);
+      });
+  }
+  const double total_local = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  dm.times.add("total", total_local);
+  static const std::vector<std::string> kPhases = {"read",      "partition", "ghost",  "oracle", "samr",  "radapt",
+                                                   "subdivide", "assemble",  "merge",  "quality", "write", "total"};
+  const std::vector<parallel::PhaseSpread> spread = parallel::spread_over_ranks(comm, dm.times, kPhases);
+  const double total = spread.back().max;
+
+  double max_load = 0, sum_load = 0;
+  for (const auto& p : dm.partitions) max_load = std::max(max_load, p.load), sum_load += p.load;
+  const double mean_load = dm.partitions.empty() ? 0 : sum_load / static_cast<double>(dm.partitions.size());
+  if (!args.report.empty())
+    parallel::run_collectively(comm, [&] {
+      if (!root) return;
+      nlohmann::json j;
+      j["format"] = "cisamr-report/1";
+      j["scene"] = args.scene;
+      j["output"] = output;
+      if (pieces) {
+        nlohmann::json names = nlohmann::json::array();
+        for (int r = 0; r < comm.size(); ++r) names.push_back(parallel::piece_path(output, r));
+        j["pieces"] = names;
+      }
+      j["dimension"] = 2;
+      j["nodes"] = dm.piece.global_nodes;
+      j["elements"] = dm.global_cells;
+      nlohmann::json phases = nlohmann::json::array();
+      for (std::size_t i = 0; i < dm.phases.size(); ++i)
+        phases.push_back({{"id", dm.phases[i].id}, {"name", dm.phases[i].name}, {"void", dm.phases[i].is_void},
+                          {"elements", per_phase[i].first}, {"measure", per_phase[i].second}});
+      j["phases"] = phases;
+      j["aspect_ratio"] = aspect_json(aspect);
+      j["algorithm"] = algorithm_json(args, dm.stats);
+      j["algorithm"]["coarse_cells_meshed"] = dm.stats.coarse_cells;
+      nlohmann::json times = nlohmann::json::object();
+      for (const auto& s : spread) times[s.name] = {{"min", s.min}, {"max", s.max}, {"mean", s.mean}};
+      j["timings_s"] = times;
+      j["total_s"] = total;
+      j["ranks"] = comm.size();
+      j["partition_method"] = dm.partition_method;
+      j["ghost_rule"] = args.fixed_ghost ? "fixed-3-cells" : "level-aware";
+      j["load"] = {{"max", max_load}, {"mean", mean_load}, {"imbalance", mean_load > 0 ? max_load / mean_load : 1.0}};
+      nlohmann::json parts = nlohmann::json::array();
+      for (const auto& p : dm.partitions)
+        parts.push_back({{"partition", p.id},
+                         {"rank", p.rank},
+                         {"lattice_min", p.lattice_min},
+                         {"lattice_max", p.lattice_max},
+                         {"load", p.load},
+                         {"elements", p.elements},
+                         {"nodes", p.nodes},
+                         {"ghost_cells", p.ghost},
+                         {"ghost_coarse_cells", p.ghost_cells},
+                         {"inclusions_loaded", p.inclusions},
+                         {"kernel_s", p.kernel_seconds}});
+      j["partitions"] = parts;
+      j["scene_inclusions"] = dm.scene_inclusions;
+      j["checksum"] = checksum_text(checksum);
+      io::AtomicFile file(args.report);
+      file.write(j.dump(2) + "\n");
+      file.commit();
+    });
+  if (root && !flags.quiet) {
+    std::printf("%s: %lld nodes, %lld triangles, max aspect ratio %.3f (bound %.1f), %.3f s, %d rank(s), %zu partitions\n",
+                output.c_str(), static_cast<long long>(dm.piece.global_nodes), static_cast<long long>(dm.global_cells),
+                aspect.max, bound, total, comm.size(), dm.partitions.size());
+    if (dm.stats.collapsed > 0)
+      std::printf("%lld quads held a feature below the local resolution (a tangency, a thin gap or a wedge "
+                  "sharper than the bound allows); collapsed with nodes at most %.3g from the phases they serve\n",
+                  static_cast<long long>(dm.stats.collapsed), dm.stats.max_collapse_deviation);
+  }
+  if (root && flags.verbose) {
+    std::printf("  %-10s %9s %9s %9s   (seconds over %d rank(s))\n", "phase", "min", "max", "mean", comm.size());
+    for (const auto& s : spread) std::printf("  %-10s %9.3f %9.3f %9.3f\n", s.name.c_str(), s.min, s.max, s.mean);
+    std::printf("  partition loads: max %.4g, mean %.4g, imbalance %.3f (%s)\n", max_load, mean_load,
+                mean_load > 0 ? max_load / mean_load : 1.0, dm.partition_method.c_str());
+    for (const auto& p : dm.partitions)
+      std::printf("  part %3d rank %2d cells [%lld,%lld)x[%lld,%lld) load %10.4g elements %9lld ghost %3d "
+                  "inclusions %6lld kernel %.3f s\n",
+                  p.id, p.rank, static_cast<long long>(p.lattice_min[0]), static_cast<long long>(p.lattice_max[0]),
+                  static_cast<long long>(p.lattice_min[1]), static_cast<long long>(p.lattice_max[1]), p.load,
+                  static_cast<long long>(p.elements), p.ghost, static_cast<long long>(p.inclusions), p.kernel_seconds);
+  }
+  if (root && dm.stats.unresolved > 0)
+    std::fprintf(stderr, "cisamr: warning: %lld quads below the finest level's resolution\n",
+                 static_cast<long long>(dm.stats.unresolved));
+  exit_code = aspect.above_bound > 0 ? 3 : 0;
 }
 
 }  // namespace
@@ -91,7 +300,9 @@ void add_mesh_command(CLI::App& app, GlobalFlags& flags, int& exit_code) {
   auto args = std::make_shared<MeshArgs>();
   CLI::App* cmd = app.add_subcommand("mesh", "Mesh a scene (cisamr-scene/1 JSON) into a conforming simplex mesh");
   cmd->add_option("scene", args->scene, "Scene file")->required();
-  cmd->add_option("-o,--output", args->output, "Output mesh: .vtu, .msh (Gmsh 4.1), .inp (Abaqus) or .mesh (Medit)")
+  cmd->add_option("-o,--output", args->output,
+                  "Output mesh: .vtu, .msh (Gmsh 4.1), .inp (Abaqus) or .mesh (Medit); in parallel also .pvtu "
+                  "(one .vtu piece per rank)")
       ->required();
   cmd->add_option("--report", args->report, "Write a JSON report (counts, per-phase measure, aspect ratios, timings)");
   cmd->add_option("--svg", args->svg, "Write a picture of the 2D mesh coloured by phase");
@@ -101,7 +312,23 @@ void add_mesh_command(CLI::App& app, GlobalFlags& flags, int& exit_code) {
                   "Levels beyond the largest requested one that may separate close interfaces")
       ->check(CLI::Range(0, 10));
   cmd->add_option("--bound", args->bound, "Aspect-ratio bound for the exit status (default 3 in 2D, 5 in 3D)");
+  cmd->add_option("--partitions", args->partitions,
+                  "Mesh N load-balanced partitions with the parallel mesher (N >= MPI ranks; default under "
+                  "mpiexec: one per rank)")
+      ->check(CLI::Range(1, 1 << 20));
+  cmd->add_flag("--gather", args->gather,
+                "Parallel run: write one file on rank 0 (any format) instead of .pvtu pieces");
+  cmd->add_flag("--fixed-ghost", args->fixed_ghost,
+                "Parallel run: a fixed 3-cell margin around every inclusion instead of the level-aware one");
+  cmd->add_option("--ghost-closure-rounds", args->closure_rounds,
+                  "Experiment: stop the ghost-region closure after R rounds (-1: exact, the default); the "
+                  "mesh may then differ from the sequential one")
+      ->group("");
   cmd->callback([args, &flags, &exit_code] {
+    if (parallel::world().size() > 1 || args->partitions > 0) {
+      run_parallel(*args, flags, exit_code);
+      return;
+    }
     const auto start = std::chrono::steady_clock::now();
     io::mesh_format_of(args->output);  // fail on a bad extension before any work
     progress(flags, "reading the scene");
@@ -140,7 +367,7 @@ void add_mesh_command(CLI::App& app, GlobalFlags& flags, int& exit_code) {
     if (flags.verbose)
       for (const auto& [name, seconds] : result.stats.times.phases()) std::printf("  %-10s %8.3f s\n", name.c_str(), seconds);
     if (result.stats.collapsed > 0 && !flags.quiet)
-      std::printf("%lld quads held a feature below the finest resolution (a tangency, a thin gap or a wedge "
+      std::printf("%lld quads held a feature below the local resolution (a tangency, a thin gap or a wedge "
                   "sharper than the bound allows); collapsed with nodes at most %.3g from the phases they serve\n",
                   static_cast<long long>(result.stats.collapsed), result.stats.max_collapse_deviation);
     if (result.stats.unresolved > 0)

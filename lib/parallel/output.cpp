@@ -1,0 +1,134 @@
+#include "parallel/output.hpp"
+
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
+#include <unistd.h>
+
+#include "core/error.hpp"
+#include "io/atomic_file.hpp"
+#include "io/mesh_io.hpp"
+#include "parallel/collective.hpp"
+#include "parallel/exchange.hpp"
+
+namespace cisamr::parallel {
+namespace fs = std::filesystem;
+
+std::string piece_path(const std::string& pvtu_path, int rank) {
+  fs::path p(pvtu_path);
+  const std::string stem = p.stem().string();
+  return (p.parent_path() / (stem + "_" + std::to_string(rank) + ".vtu")).string();
+}
+
+namespace {
+
+std::string pvtu_text(const std::string& pvtu_path, int ranks) {
+  std::string xml;
+  xml += "<?xml version=\"1.0\"?>\n";
+  xml += "<VTKFile type=\"PUnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n";
+  xml += "  <PUnstructuredGrid GhostLevel=\"0\">\n";
+  xml += "    <PPointData>\n      <PDataArray type=\"Int64\" Name=\"global_id\"/>\n    </PPointData>\n";
+  xml += "    <PCellData Scalars=\"phase\">\n";
+  xml += "      <PDataArray type=\"Int32\" Name=\"phase\"/>\n";
+  xml += "      <PDataArray type=\"Int32\" Name=\"partition\"/>\n";
+  xml += "      <PDataArray type=\"Float64\" Name=\"aspect_ratio\"/>\n";
+  xml += "    </PCellData>\n";
+  xml += "    <PPoints>\n      <PDataArray type=\"Float64\" Name=\"Points\" NumberOfComponents=\"3\"/>\n    </PPoints>\n";
+  for (int r = 0; r < ranks; ++r)
+    xml += "    <Piece Source=\"" + fs::path(piece_path(pvtu_path, r)).filename().string() + "\"/>\n";
+  xml += "  </PUnstructuredGrid>\n</VTKFile>\n";
+  return xml;
+}
+
+void remove_quietly(const std::string& path) {
+  std::error_code ec;
+  fs::remove(path, ec);
+}
+
+}  // namespace
+
+void write_pvtu2(const Comm& comm, const std::string& pvtu_path, const mesh::Mesh2& piece) {
+  const std::string final_path = piece_path(pvtu_path, comm.rank());
+  const fs::path fp(final_path);
+  const std::string temporary =
+      (fp.parent_path() / ("." + fp.filename().string() + ".part." + std::to_string(::getpid()))).string();
+  bool renamed = false;
+  try {
+    run_collectively(comm, [&] {
+      if (fs::path(pvtu_path).extension() != ".pvtu")
+        throw InputError(pvtu_path, "", "a parallel output must end in .pvtu");
+      io::write_vtu(temporary, piece);
+    });
+    run_collectively(comm, [&] {
+      if (::rename(temporary.c_str(), final_path.c_str()) != 0)
+        throw InputError(final_path, "", std::string("cannot write: ") + std::strerror(errno));
+      renamed = true;
+    });
+    run_collectively(comm, [&] {
+      if (comm.rank() != 0) return;
+      io::AtomicFile file(pvtu_path);
+      file.write(pvtu_text(pvtu_path, comm.size()));
+      file.commit();
+    });
+  } catch (...) {
+    remove_quietly(temporary);
+    if (renamed) remove_quietly(final_path);
+    throw;
+  }
+}
+
+void write_gathered2(const Comm& comm, const std::string& path, const mesh::Mesh2& gathered,
+                     const std::vector<geometry::Phase>& phases, int root) {
+  run_collectively(comm, [&] {
+    if (comm.rank() == root) io::write_mesh(path, gathered, phases);
+  });
+}
+
+std::vector<PhaseSpread> spread_over_ranks(const Comm& comm, const PhaseTimes& times,
+                                           const std::vector<std::string>& names) {
+  std::vector<PhaseSpread> out;
+  for (const std::string& name : names) {
+    double mine = 0;
+    for (const auto& [n, s] : times.phases())
+      if (n == name) mine = s;
+    PhaseSpread s{name, comm.allreduce_min(mine), comm.allreduce_max(mine), comm.allreduce_sum(mine) / comm.size()};
+    out.push_back(s);
+  }
+  return out;
+}
+
+quality::AspectStats merge_aspect_statistics(const Comm& comm, const quality::AspectStats& local) {
+  quality::AspectStats g;
+  g.bound = local.bound;
+  g.max = comm.allreduce_max(local.max);
+  g.count = static_cast<std::size_t>(comm.allreduce_sum(static_cast<std::int64_t>(local.count)));
+  g.above_bound = static_cast<std::size_t>(comm.allreduce_sum(static_cast<std::int64_t>(local.above_bound)));
+  const double weighted = comm.allreduce_sum(local.mean * static_cast<double>(local.count));
+  g.mean = g.count > 0 ? weighted / static_cast<double>(g.count) : 0;
+  const bool has = local.count > 0;
+  g.min_angle_deg = -comm.allreduce_max(has ? -local.min_angle_deg : -1e300);
+  g.max_angle_deg = comm.allreduce_max(has ? local.max_angle_deg : -1e300);
+  if (g.count == 0) g.min_angle_deg = g.max_angle_deg = 0;
+  Packer p;
+  p.put_vector(local.bin_edges);
+  std::vector<std::uint64_t> hist(local.histogram.begin(), local.histogram.end());
+  p.put_vector(hist);
+  for (const Bytes& b : allgather_bytes(comm, p.bytes())) {
+    Unpacker u(b);
+    const auto edges = u.get_vector<double>();
+    const auto h = u.get_vector<std::uint64_t>();
+    if (edges.size() > g.bin_edges.size()) {
+      // Longer edge list: move the overflow bin to the new end.
+      const std::size_t overflow = g.histogram.empty() ? 0 : g.histogram.back();
+      if (!g.histogram.empty()) g.histogram.back() = 0;
+      g.bin_edges = edges;
+      g.histogram.resize(edges.size(), 0);
+      g.histogram.back() += overflow;
+    }
+    for (std::size_t i = 0; i + 1 < h.size(); ++i) g.histogram[i] += h[i];
+    if (!h.empty()) g.histogram.back() += h.back();
+  }
+  return g;
+}
+
+}  // namespace cisamr::parallel

@@ -1,0 +1,45 @@
+#pragma once
+// Output of a parallel run (DESIGN.md §7): one .vtu piece per rank plus the .pvtu that
+// lists them, or one gathered file on rank 0; and the per-rank phase-time spread for the
+// report. Every function here is collective; files appear only when every rank succeeded.
+#include <string>
+#include <vector>
+
+#include "core/comm.hpp"
+#include "core/timer.hpp"
+#include "geometry/scene.hpp"
+#include "mesh/simplex_mesh.hpp"
+#include "quality/quality.hpp"
+
+namespace cisamr::parallel {
+
+// "DIR/NAME.pvtu" → "DIR/NAME_<rank>.vtu".
+std::string piece_path(const std::string& pvtu_path, int rank);
+
+// Collective. Each rank writes its piece under a temporary name; once every rank has, the
+// pieces are renamed into place; once every rank has, rank 0 writes the .pvtu (through
+// io::AtomicFile). A failure anywhere removes what this call wrote on every rank and is
+// thrown on every rank (collective.hpp).
+void write_pvtu2(const Comm& comm, const std::string& pvtu_path, const mesh::Mesh2& piece);
+
+// Collective. Rank `root` writes `gathered` (any format io::write_mesh knows).
+void write_gathered2(const Comm& comm, const std::string& path, const mesh::Mesh2& gathered,
+                     const std::vector<geometry::Phase>& phases, int root = 0);
+
+struct PhaseSpread {
+  std::string name;
+  double min = 0, max = 0, mean = 0;  // seconds over ranks
+};
+
+// Collective. For each name (the same list on every rank), min/max/mean over ranks of this
+// rank's time under that name (0 when it has none).
+std::vector<PhaseSpread> spread_over_ranks(const Comm& comm, const PhaseTimes& times,
+                                           const std::vector<std::string>& names);
+
+// Collective. Aspect-ratio statistics of the union of every rank's cells from each rank's
+// own (quality::aspect_statistics with the same bound): max/min, counts, mean weighted by
+// count, histograms summed bin by bin (every rank's edges are a prefix of 1.0, 1.1, ...).
+// `worst` is left empty (cell ids are per rank).
+quality::AspectStats merge_aspect_statistics(const Comm& comm, const quality::AspectStats& local);
+
+}  // namespace cisamr::parallel

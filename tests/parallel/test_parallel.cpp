@@ -1,0 +1,357 @@
+// lib/parallel through the serial Comm: ghost regions, the merge, partition invariance for
+// (1 rank, 1 and 7 partitions), output files, error agreement. The MPI tests
+// (test_parallel_mpi.cpp, cli_test.sh) run the same checks on 2-4 ranks.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <random>
+
+#include "io/mesh_io.hpp"
+#include "io/scene_io.hpp"
+#include "parallel/collective.hpp"
+#include "parallel/output.hpp"
+#include "scenes.hpp"
+#include "quality/quality.hpp"
+
+namespace cisamr::parallel {
+namespace {
+
+namespace fs = std::filesystem;
+const SerialComm kSerial;
+
+TEST(InclusionIndex, QueryMatchesBruteForce) {
+  const geometry::SceneDesc scene = testing::corner_scene();
+  const grid::Lattice2 lattice = scene_lattice2(scene, {});
+  for (bool level_aware : {true, false}) {
+    GhostRule rule;
+    rule.level_aware = level_aware;
+    const InclusionIndex2 index(scene, lattice, rule);
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> u(-4, 36);
+    for (int q = 0; q < 300; ++q) {
+      double x0 = u(rng), x1 = u(rng), y0 = u(rng), y1 = u(rng);
+      const Box2 box{{std::min(x0, x1), std::min(y0, y1)}, {std::max(x0, x1), std::max(y0, y1)}};
+      std::vector<std::int32_t> found, expected;
+      index.query(box, found);
+      for (std::int32_t k = 0; k < index.size(); ++k)
+        if (boxes_overlap(index.inflated(k), box)) expected.push_back(k);
+      ASSERT_EQ(found, expected);
+    }
+  }
+}
+
+TEST(InclusionIndex, LevelAwareMarginShrinksWithLevels) {
+  const geometry::SceneDesc scene = testing::corner_scene();
+  const InclusionIndex2 index(scene, scene_lattice2(scene, {}), GhostRule{});
+  // inclusions[22] is a circle of radius 0.9 with levels 3: margin 4·h/8 = 0.5.
+  const Box2 b = index.inflated(22);
+  EXPECT_NEAR(b.max[0] - b.min[0], 2 * 0.9 + 2 * 0.5, 1e-12);
+  // inclusions[0] has levels 1: margin 4·h/2.
+  const Box2 c = index.inflated(0);
+  EXPECT_NEAR(c.max[0] - c.min[0], 2 * std::get<geometry::Circle>(scene.inclusions[0].shape).radius + 4.0, 1e-12);
+}
+
+TEST(GhostRegion, IsTheClosureOfMeetingInflatedBoxes) {
+  const geometry::SceneDesc scene = testing::corner_scene();
+  const grid::Lattice2 lattice = scene_lattice2(scene, {});
+  for (bool level_aware : {true, false}) {
+    GhostRule rule;
+    rule.level_aware = level_aware;
+    const InclusionIndex2 index(scene, lattice, rule);
+    const grid::CellRange<2> box{{10, 6}, {17, 12}};
+    const GhostRegion2 region = ghost_region2(index, lattice, box, rule);
+    const Box2 seed{{10.0 - rule.box_margin_cells, 6.0 - rule.box_margin_cells},
+                    {17.0 + rule.box_margin_cells, 12.0 + rule.box_margin_cells}};
+    // Brute-force fixed point.
+    std::vector<char> in(static_cast<std::size_t>(index.size()), 0);
+    for (bool changed = true; changed;) {
+      changed = false;
+      for (std::int32_t k = 0; k < index.size(); ++k) {
+        if (in[static_cast<std::size_t>(k)]) continue;
+        bool meets = boxes_overlap(index.inflated(k), seed);
+        for (std::int32_t j = 0; j < index.size() && !meets; ++j)
+          meets = in[static_cast<std::size_t>(j)] && boxes_overlap(index.inflated(k), index.inflated(j));
+        if (meets) in[static_cast<std::size_t>(k)] = 1, changed = true;
+      }
+    }
+    std::vector<std::int32_t> expected;
+    for (std::int32_t k = 0; k < index.size(); ++k)
+      if (in[static_cast<std::size_t>(k)]) expected.push_back(k);
+    EXPECT_EQ(region.inclusions, expected);
+    if (level_aware) EXPECT_LT(region.inclusions.size(), scene.inclusions.size());  // not the whole scene
+    for (std::int32_t k : region.inclusions)  // the range covers every loaded inflated box
+      for (int d = 0; d < 2; ++d) {
+        EXPECT_LE(static_cast<double>(region.range.lo[d]), std::max(0.0, index.inflated(k).min[d]));
+        EXPECT_GE(static_cast<double>(region.range.hi[d]),
+                  std::min(static_cast<double>(lattice.coarse_cells[d]), index.inflated(k).max[d]));
+        EXPECT_GE(box.lo[d] - region.range.lo[d], 0);
+        EXPECT_LE(box.lo[d] - region.range.lo[d], region.ghost);
+        EXPECT_LE(region.range.hi[d] - box.hi[d], region.ghost);
+      }
+  }
+}
+
+TEST(GhostRegion, SubsetKeepsOrder) {
+  const geometry::SceneDesc scene = testing::corner_scene();
+  const geometry::SceneDesc sub = subset_scene(scene, {3, 7, 22});
+  ASSERT_EQ(sub.inclusions.size(), 3u);
+  EXPECT_EQ(sub.inclusions[1].levels, scene.inclusions[7].levels);
+  EXPECT_EQ(std::get<geometry::Circle>(sub.inclusions[2].shape).center,
+            std::get<geometry::Circle>(scene.inclusions[22].shape).center);
+  EXPECT_EQ(sub.phases.size(), scene.phases.size());
+}
+
+TEST(Distribution, BlocksCoverPartitionsInOrder) {
+  for (int n = 1; n <= 20; ++n)
+    for (int p = 1; p <= n; ++p) {
+      int next = 0;
+      for (int r = 0; r < p; ++r) {
+        const auto [first, last] = partitions_of_rank(n, p, r);
+        EXPECT_EQ(first, next);
+        EXPECT_GE(last - first, n / p);
+        EXPECT_LE(last - first, n / p + 1);
+        for (int i = first; i < last; ++i) EXPECT_EQ(rank_of_partition(i, n, p), r);
+        next = last;
+      }
+      EXPECT_EQ(next, n);
+    }
+}
+
+// The heart of it: the merged mesh of N partitions on one rank is the sequential one.
+void expect_invariant(const geometry::SceneDesc& scene, int partitions, bool level_aware, bool strict_quality) {
+  const testing::RunOutcome seq = testing::run_sequential(scene);
+  const testing::RunOutcome par = testing::run_parallel(kSerial, scene, partitions, level_aware);
+  ASSERT_EQ(seq.failed, par.failed) << seq.error << " | " << par.error;
+  if (seq.failed) return;
+  EXPECT_EQ(par.mesh.cell_count(), seq.mesh.cell_count());
+  EXPECT_EQ(par.mesh.node_count(), seq.mesh.node_count());
+  EXPECT_TRUE(canonical_triangles(par.mesh) == canonical_triangles(seq.mesh));
+  EXPECT_EQ(par.checksum, seq.checksum);
+  EXPECT_EQ(mesh_checksum2(par.mesh), seq.checksum);
+  // DESIGN.md §2 across partition boundaries.
+  bool voids = false;
+  for (const auto& p : scene.phases) voids = voids || p.is_void;
+  const Box2 domain{{scene.domain_min[0], scene.domain_min[1]}, {scene.domain_max[0], scene.domain_max[1]}};
+  const double area = (domain.max[0] - domain.min[0]) * (domain.max[1] - domain.min[1]);
+  const auto conf = quality::check_conformity(par.mesh, domain, voids ? -1.0 : area, voids);
+  EXPECT_EQ(conf.duplicate_nodes, 0u);
+  EXPECT_EQ(conf.hanging_nodes, 0u);
+  EXPECT_EQ(conf.open_facets_inside, 0u);
+  EXPECT_EQ(conf.unused_nodes, 0u);
+  EXPECT_TRUE(conf.ok) << (conf.examples.empty() ? "" : conf.examples.front());
+  if (strict_quality) {
+    EXPECT_LE(quality::aspect_statistics(par.mesh, 3.0).max, 3.0);
+    const geometry::Oracle2 oracle(scene);
+    const auto fid = quality::check_fidelity(par.mesh, oracle, quality::default_fidelity_tolerance(scene));
+    EXPECT_TRUE(fid.ok) << (fid.examples.empty() ? "" : fid.examples.front());
+  }
+  // Global ids: 0..n-1, each once; a rank owns the first owned_nodes of its piece.
+  std::vector<char> seen(static_cast<std::size_t>(par.distributed.piece.global_nodes), 0);
+  for (GlobalId g : par.distributed.piece.mesh.node_global_id) seen[static_cast<std::size_t>(g)]++;
+  for (char s : seen) EXPECT_EQ(s, 1);
+}
+
+class Invariance : public ::testing::TestWithParam<int> {};
+
+TEST(CornerScene, IsValid) {
+  EXPECT_NO_THROW(geometry::Oracle2{testing::corner_scene()});
+}
+
+TEST_P(Invariance, CornerScene) {
+  const geometry::SceneDesc scene = testing::corner_scene();
+  expect_invariant(scene, GetParam(), true, true);
+  expect_invariant(scene, GetParam(), false, true);
+}
+
+TEST_P(Invariance, RandomScenes) {
+  for (unsigned seed = 1; seed <= 16; ++seed) {
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    expect_invariant(testing::random_scene(seed), GetParam(), true, false);
+  }
+}
+
+TEST_P(Invariance, SparseRandomScenes) {
+  for (unsigned seed = 1; seed <= 16; ++seed) {
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    expect_invariant(testing::sparse_random_scene(seed), GetParam(), true, false);
+  }
+}
+
+// The tests can fail: without the ghost margins the merged mesh is not the sequential one.
+TEST(Invariance, NoMarginBreaksIt) {
+  GhostRule none;
+  none.level_aware = false;
+  none.fixed_cells = 0;
+  none.box_margin_cells = 0;
+  int differing = 0;
+  for (unsigned seed = 1; seed <= 8; ++seed) {
+    const geometry::SceneDesc scene = testing::sparse_random_scene(seed);
+    const testing::RunOutcome seq = testing::run_sequential(scene);
+    const testing::RunOutcome par = testing::run_parallel(kSerial, scene, 7, none);
+    differing += seq.failed || par.failed || par.checksum != seq.checksum;
+  }
+  EXPECT_GE(differing, 4);
+}
+
+// Sparse scenes: a partition loads part of the scene, not all of it.
+TEST(Invariance, GhostRegionsArePartial) {
+  const geometry::SceneDesc scene = testing::corner_scene();
+  const testing::RunOutcome par = testing::run_parallel(kSerial, scene, 8);
+  ASSERT_FALSE(par.failed) << par.error;
+  for (const auto& p : par.distributed.partitions) EXPECT_LT(p.inclusions, par.distributed.scene_inclusions);
+}
+
+TEST_P(Invariance, DataExample) {
+  const geometry::SceneDesc scene = io::read_scene(CISAMR_SOURCE_DIR "/data/examples/composite.json");
+  expect_invariant(scene, GetParam(), true, false);
+}
+
+INSTANTIATE_TEST_SUITE_P(OneRank, Invariance, ::testing::Values(1, 7, 13));
+
+TEST(Invariance, PartitionCornersAreStraddled) {
+  const geometry::SceneDesc scene = testing::corner_scene();
+  for (int n : {5, 7}) {  // the (2 ranks, 5) and (1 rank, 7) cases
+    const testing::RunOutcome par = testing::run_parallel(kSerial, scene, n);
+    ASSERT_FALSE(par.failed) << par.error;
+    EXPECT_GE(testing::straddled_corners(par.distributed, scene), 1) << n << " partitions";
+  }
+}
+
+TEST(Invariance, GlobalIdsDoNotDependOnRanksOnlyOnPartitions) {
+  // Owned-first numbering in (owner partition, kernel order): for 1 rank and N partitions
+  // the gathered mesh's node order equals the piece's, owned first = all.
+  const geometry::SceneDesc scene = testing::corner_scene();
+  const testing::RunOutcome par = testing::run_parallel(kSerial, scene, 6);
+  ASSERT_FALSE(par.failed);
+  const auto& piece = par.distributed.piece;
+  EXPECT_EQ(piece.owned_nodes, piece.global_nodes);
+  for (std::size_t i = 0; i < piece.mesh.node_global_id.size(); ++i)
+    ASSERT_EQ(piece.mesh.node_global_id[i], static_cast<GlobalId>(i));
+  // Cells come partition by partition.
+  EXPECT_TRUE(std::is_sorted(piece.mesh.cell_partition.begin(), piece.mesh.cell_partition.end()));
+}
+
+TEST(Merge, DifferentCoordinatesForOneKeyAreABug) {
+  const grid::Lattice2 lattice{{0, 0}, 1.0, 0, {2, 1}};
+  std::vector<PartitionOutput2> parts(2);
+  for (int p = 0; p < 2; ++p) {
+    parts[static_cast<std::size_t>(p)].partition = p;
+    parts[static_cast<std::size_t>(p)].box = {{p, 0}, {p + 1, 1}};
+    auto& r = parts[static_cast<std::size_t>(p)].result;
+    const double x0 = p, x1 = p + 1;
+    r.mesh.coords = {x0, 0, x1, 0, x1, 1, x0, 1};
+    r.mesh.cell_nodes = {0, 1, 2, 0, 2, 3};
+    r.mesh.cell_phase = {1, 1};
+    r.node_key = {grid::key2(p, 0), grid::key2(p + 1, 0), grid::key2(p + 1, 1), grid::key2(p, 1)};
+  }
+  {
+    auto copy = parts;
+    const NumberedPiece2 piece = merge_and_number2(kSerial, copy, lattice);
+    EXPECT_EQ(piece.global_nodes, 6);  // two shared nodes merged by key
+    EXPECT_EQ(piece.mesh.cell_count(), 4u);
+  }
+  parts[1].result.mesh.coords[0] = 1.0 + 1e-15;  // the shared node (1,0), placed differently
+  try {
+    merge_and_number2(kSerial, parts, lattice);
+    FAIL();
+  } catch (const CollectiveInternalError& e) {  // a bug, agreed between ranks like any error
+    EXPECT_STREQ(e.what(), "partitions 0 and 1 place lattice node (1, 0) differently");
+  }
+}
+
+TEST(Collective, ErrorsKeepTheirKindAndText) {
+  try {
+    run_collectively(kSerial, [] { throw InputError("a.json", "inclusions[2].radius", "must be positive"); });
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_TRUE(is_collective(e));
+    EXPECT_STREQ(e.what(), "a.json: inclusions[2].radius: must be positive");
+  }
+  EXPECT_THROW(run_collectively(kSerial, [] { throw MeshingError("too fine"); }), CollectiveMeshingError);
+  EXPECT_THROW(run_collectively(kSerial, [] { throw std::out_of_range("bug"); }), CollectiveInternalError);
+  EXPECT_NO_THROW(run_collectively(kSerial, [] {}));
+}
+
+TEST(Collective, SubsetOracleErrorsNameSceneIndices) {
+  geometry::SceneDesc scene = testing::corner_scene();
+  // Two overlapping circles of different phases, far from the others' first partition.
+  geometry::Inclusion a, b;
+  a.shape = geometry::Circle{{30.5, 1.5}, 1.0};
+  a.phase = 2;
+  b.shape = geometry::Circle{{31.0, 1.6}, 0.8};
+  b.phase = 3;
+  scene.inclusions.push_back(a);
+  scene.inclusions.push_back(b);
+  std::string sequential, parallel;
+  try {
+    geometry::Oracle2 oracle(scene);
+  } catch (const InputError& e) {
+    sequential = e.what();
+  }
+  MeshOptions options;
+  options.partitions = 1;
+  try {
+    mesh2_distributed(kSerial, scene, options);
+  } catch (const InputError& e) {
+    parallel = e.what();
+  }
+  EXPECT_FALSE(sequential.empty());
+  EXPECT_EQ(parallel, sequential);
+}
+
+TEST(Collective, TooFewPartitionsForTheRanksIsAnInputError) {
+  MeshOptions options;
+  options.partitions = 0;
+  EXPECT_THROW(mesh2_distributed(kSerial, testing::corner_scene(), options), CollectiveInputError);
+}
+
+class TempDir {
+ public:
+  TempDir() : path_(fs::temp_directory_path() / ("cisamr_parallel_test_" + std::to_string(::getpid()))) {
+    fs::remove_all(path_);
+    fs::create_directories(path_);
+  }
+  ~TempDir() { fs::remove_all(path_); }
+  std::string file(const std::string& name) const { return (path_ / name).string(); }
+  std::size_t entries() const {
+    return static_cast<std::size_t>(std::distance(fs::directory_iterator(path_), fs::directory_iterator()));
+  }
+
+ private:
+  fs::path path_;
+};
+
+TEST(Output, PvtuListsPiecesThatReadBack) {
+  TempDir dir;
+  const testing::RunOutcome par = testing::run_parallel(kSerial, testing::corner_scene(), 4);
+  ASSERT_FALSE(par.failed);
+  write_pvtu2(kSerial, dir.file("out.pvtu"), par.distributed.piece.mesh);
+  EXPECT_EQ(dir.entries(), 2u);
+  std::ifstream in(dir.file("out.pvtu"));
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("<Piece Source=\"out_0.vtu\"/>"), std::string::npos);
+  EXPECT_NE(text.find("Name=\"global_id\""), std::string::npos);
+  const io::LoadedMesh piece = io::read_mesh(dir.file("out_0.vtu"));
+  EXPECT_EQ(piece.mesh2.cell_count(), par.mesh.cell_count());
+  EXPECT_EQ(piece.mesh2.node_global_id, par.distributed.piece.mesh.node_global_id);
+  EXPECT_EQ(piece.mesh2.cell_partition, par.distributed.piece.mesh.cell_partition);
+}
+
+TEST(Output, UnwritablePieceLeavesNothing) {
+  TempDir dir;
+  const testing::RunOutcome par = testing::run_parallel(kSerial, testing::corner_scene(), 2);
+  ASSERT_FALSE(par.failed);
+  fs::create_directories(dir.file("out_0.vtu/inside"));  // the piece's name is a directory
+  try {
+    write_pvtu2(kSerial, dir.file("out.pvtu"), par.distributed.piece.mesh);
+    FAIL();
+  } catch (const CollectiveInputError& e) {
+    EXPECT_NE(std::string(e.what()).find("out_0.vtu: cannot write"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(dir.entries(), 1u);  // only the directory we made
+}
+
+}  // namespace
+}  // namespace cisamr::parallel
