@@ -38,7 +38,7 @@ struct MeshArgs {
   int partitions = 0;  // 0: not given (sequential outside mpiexec, one per rank inside)
   bool gather = false;
   bool fixed_ghost = false;  // the fixed 3-cell inclusion margin instead of the level-aware one
-  int closure_rounds = -1;   // experiment: cut the ghost closure short (-1: exact)
+  int closure_rounds = 0;    // ghost closure rounds (0: none, the default; -1: the full closure)
 };
 
 void progress(const GlobalFlags& flags, const char* what) {
@@ -321,8 +321,8 @@ void add_mesh_command(CLI::App& app, GlobalFlags& flags, int& exit_code) {
   cmd->add_flag("--fixed-ghost", args->fixed_ghost,
                 "Parallel run: a fixed 3-cell margin around every inclusion instead of the level-aware one");
   cmd->add_option("--ghost-closure-rounds", args->closure_rounds,
-                  "Experiment: stop the ghost-region closure after R rounds (-1: exact, the default); the "
-                  "mesh may then differ from the sequential one")
+                  "Comparison: chain the ghost region through R rounds of nearby inclusions (0, the default, "
+                  "is exact because inclusion levels are settled beforehand; -1: the full closure)")
       ->group("");
   cmd->callback([args, &flags, &exit_code] {
     if (parallel::world().size() > 1 || args->partitions > 0) {

@@ -1,5 +1,7 @@
 #include "parallel/distributed.hpp"
 
+#include "pipeline/effective_levels.hpp"
+
 #include <algorithm>
 #include <chrono>
 #include <regex>
@@ -106,11 +108,15 @@ DistributedMesh2 mesh2_distributed(const Comm& comm, geometry::SceneDesc scene, 
   // Ghost regions of this rank's partitions, and the inclusions they need.
   const auto [first, last] = partitions_of_rank(n, ranks, rank);
   grid::Lattice2 lattice;
+  std::vector<int> levels;  // rule R1's level per scene inclusion
   std::vector<GhostRegion2> regions;
   {
     ScopedPhase timer(&out.times, "ghost");
     run_collectively(comm, [&] {
       lattice = scene_lattice2(scene, options.pipeline);
+      // Every rank computes the same levels from the whole scene's descriptors (cheap:
+      // pairs of nearby inclusions); they make SAMR local, so the ghost stays small.
+      levels = pipeline::effective_levels2(scene, lattice);
       const InclusionIndex2 index(scene, lattice, options.ghost);
       for (int p = first; p < last; ++p) {
         grid::CellRange<2> box;
@@ -160,7 +166,10 @@ DistributedMesh2 mesh2_distributed(const Comm& comm, geometry::SceneDesc scene, 
         }
       }
       const auto t0 = std::chrono::steady_clock::now();
-      PartitionOutput2 o{p, region.box, pipeline::run2(*oracle, lattice, region.box, region.ghost, options.pipeline, p)};
+      std::vector<int> region_levels;
+      for (std::int32_t k : region.inclusions) region_levels.push_back(levels[static_cast<std::size_t>(k)]);
+      PartitionOutput2 o{p, region.box,
+                         pipeline::run2(*oracle, lattice, region.box, region.ghost, options.pipeline, p, region_levels)};
       PartitionSummary s;
       s.id = p;
       s.rank = rank;

@@ -20,11 +20,13 @@ struct GhostRule {
   double fixed_cells = 3;
   // Coarse cells around the box itself: its cells look one cell (r-adaptivity, hanging
   // nodes) or two cells (rule R4 at level 0) beyond it, and a 2:1 cascade reaches < h.
-  double box_margin_cells = 2;
-  // Experiment only (-1 = no limit, the exact closure): stop the closure after this many
-  // rounds of "inflated boxes meet". Measures how far influence really travels on a
-  // given scene (README.md, "dense scenes"); invariance is then not guaranteed.
-  int max_closure_rounds = -1;
+  double box_margin_cells = 4;
+  // Rounds of the closure "add every inclusion whose inflated box meets an added one's".
+  // 0 (default): none. pipeline::effective_levels2 settles every level that rule R4 could
+  // carry from one inclusion to another before meshing, so what decides a cell lies within
+  // a few coarse cells of it (README.md, "Ghost region"). -1: the full closure, for
+  // comparison.
+  int max_closure_rounds = 0;
 };
 
 // The full scene's lattice (every inclusion's levels count for Lmax), built from the

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "core/error.hpp"
+#include "pipeline/effective_levels.hpp"
 #include "radapt/radapt2.hpp"
 #include "samr/samr2.hpp"
 #include "subdivide/subdivide2.hpp"
@@ -27,7 +28,7 @@ grid::Lattice2 make_lattice2(const geometry::Oracle2& oracle, const Options& opt
 }
 
 Result2 run2(const geometry::Oracle2& oracle, const grid::Lattice2& lattice, const grid::CellRange<2>& box,
-             int ghost, const Options& options, int partition_id) {
+             int ghost, const Options& options, int partition_id, std::span<const int> levels) {
   Result2 result;
   Stats& stats = result.stats;
   grid::CellRange<2> range = box;
@@ -37,7 +38,7 @@ Result2 run2(const geometry::Oracle2& oracle, const grid::Lattice2& lattice, con
   }
   samr::RefinedGrid2 grid = [&] {
     ScopedPhase timer(&stats.times, "samr");
-    return samr::refine2(oracle, lattice, range);
+    return samr::refine2(oracle, lattice, range, levels);
   }();
   stats.coarse_cells = grid.forest.root_count();
   stats.refinements = grid.refinements;
@@ -104,7 +105,8 @@ Result2 run2(const geometry::Oracle2& oracle, const grid::Lattice2& lattice, con
 
 Result2 mesh2(const geometry::Oracle2& oracle, const Options& options) {
   const grid::Lattice2 lattice = make_lattice2(oracle, options);
-  return run2(oracle, lattice, lattice.whole_domain(), 0, options);
+  const std::vector<int> levels = effective_levels2(oracle.scene(), lattice);
+  return run2(oracle, lattice, lattice.whole_domain(), 0, options, 0, levels);
 }
 
 }  // namespace cisamr::pipeline

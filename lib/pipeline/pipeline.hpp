@@ -3,6 +3,7 @@
 // The same call meshes the whole domain (one box, no ghost) or one partition's box with
 // its ghost layer; the parallel mesher runs it unchanged on every partition (DESIGN.md §3).
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "core/timer.hpp"
@@ -45,8 +46,10 @@ grid::Lattice2 make_lattice2(const geometry::Oracle2& oracle, const Options& opt
 // Meshes the coarse cells of `box` (global coarse indices), using `ghost` extra coarse
 // cells on each side (clipped to the domain) so that decisions inside the box are those
 // of the whole-domain run. Cells of void phases are dropped; unused nodes removed.
+// `levels`: the level rule R1 asks of each of the oracle's inclusions, from
+// effective_levels2 over the whole scene (a partition's oracle holds a subset of it).
 Result2 run2(const geometry::Oracle2& oracle, const grid::Lattice2& lattice, const grid::CellRange<2>& box,
-             int ghost, const Options& options, int partition_id = 0);
+             int ghost, const Options& options, int partition_id, std::span<const int> levels);
 
 // The whole domain in one box.
 Result2 mesh2(const geometry::Oracle2& oracle, const Options& options = {});

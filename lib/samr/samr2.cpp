@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include <stdexcept>
+
 #include "core/error.hpp"
 
 namespace cisamr::samr {
@@ -11,7 +13,8 @@ constexpr std::int64_t kCandidateBlock = 8;  // roots per side of one AABB-tree 
 
 class Refiner {
  public:
-  Refiner(const geometry::Oracle2& oracle, RefinedGrid2& g) : oracle_(oracle), g_(g) {}
+  Refiner(const geometry::Oracle2& oracle, RefinedGrid2& g, std::span<const int> levels)
+      : oracle_(oracle), g_(g), levels_(levels) {}
 
   void run() {
     const std::int32_t roots = g_.forest.root_count();
@@ -27,6 +30,7 @@ class Refiner {
  private:
   const geometry::Oracle2& oracle_;
   RefinedGrid2& g_;
+  std::span<const int> levels_;
   std::vector<std::int32_t> stack_;
   std::vector<int> groups_;
 
@@ -54,7 +58,7 @@ class Refiner {
     bool split = false;
     groups_.clear();
     for (std::int32_t k : g_.touched(c)) {
-      if (level < oracle_.levels_of(k)) split = true;
+      if (level < (levels_.empty() ? oracle_.levels_of(k) : levels_[static_cast<std::size_t>(k)])) split = true;
       const int group = oracle_.interface_group(k);
       if (std::find(groups_.begin(), groups_.end(), group) == groups_.end()) groups_.push_back(group);
     }
@@ -119,7 +123,9 @@ class Refiner {
 }  // namespace
 
 RefinedGrid2 refine2(const geometry::Oracle2& oracle, const grid::Lattice2& lattice,
-                     const grid::CellRange<2>& range) {
+                     const grid::CellRange<2>& range, std::span<const int> levels) {
+  if (!levels.empty() && static_cast<int>(levels.size()) != oracle.inclusion_count())
+    throw std::logic_error("refine2: one level per inclusion expected");
   RefinedGrid2 g{grid::QuadForest(lattice, range), {}, {}, {}, {}, {}, 0};
   const std::int32_t roots = g.forest.root_count();
   const std::int64_t nx = range.count(0), ny = range.count(1);
@@ -175,7 +181,7 @@ RefinedGrid2 refine2(const geometry::Oracle2& oracle, const grid::Lattice2& latt
   }
   g.root_candidate_begin[static_cast<std::size_t>(roots)] = static_cast<std::int32_t>(g.root_candidates.size());
 
-  Refiner(oracle, g).run();
+  Refiner(oracle, g, levels).run();
   return g;
 }
 

@@ -47,7 +47,10 @@ struct RefinedGrid2 {
 };
 
 // Refines the coarse cells of `range` (the partition box plus its ghost layer).
+// `levels[k]` is the level rule R1 asks of inclusion k (the oracle's inclusion index);
+// pipeline::effective_levels2 computes them so that rule R4 never has to carry a level
+// from one inclusion to another. Empty: the inclusions' own levels.
 RefinedGrid2 refine2(const geometry::Oracle2& oracle, const grid::Lattice2& lattice,
-                     const grid::CellRange<2>& range);
+                     const grid::CellRange<2>& range, std::span<const int> levels = {});
 
 }  // namespace cisamr::samr

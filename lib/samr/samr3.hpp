@@ -1,0 +1,70 @@
+#pragma once
+// SAMR in 3D: refine the tet forest (nested honeycomb, grid/README.md 3D part) near
+// interfaces until the rules hold (lib/pipeline/README3.md):
+//   R1  a tet whose closed bounding box meets the boundary of inclusion k, at level < R_k,
+//       is refined;
+//   R2  a tet met by the boundaries of two interface groups, at level < Lmax, is refined;
+//   B   balance (face rule of the closure tables): a leaf whose closure holds a node
+//       other than its vertices and edge midpoints is refined (this implies 2:1 edge
+//       balance and keeps finer nodes out of coarse faces);
+//   R4  buffer: a leaf with a vertex on a cut leaf carries no hanging midpoint (refined
+//       otherwise). So cut leaves and every leaf around a node that may move are closed by
+//       nothing, and all leaves around such a node have one level.
+// The rules are applied in synchronous sweeps over all leaves until none fires, so the
+// result depends only on the scene and the lattice, never on a visiting order.
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "geometry/oracle3.hpp"
+#include "grid/tet_forest.hpp"
+
+namespace cisamr::samr {
+
+struct RefinedGrid3 {
+  grid::TetForest forest;
+  // Per coarse cube of the range (x fastest): inclusions whose bounding box meets the
+  // closed cube (CSR).
+  std::vector<std::int32_t> cube_candidate_begin;  // cubes + 1
+  std::vector<std::int32_t> cube_candidates;
+  // Per tet: inclusions whose boundary meets the tet's closed bounding box (append-only
+  // pool). Conservative: a tet with an empty list lies inside one phase.
+  std::vector<std::int32_t> touch_begin;
+  std::vector<std::uint16_t> touch_count;
+  std::vector<std::int32_t> touch_pool;
+  std::int64_t refinements = 0;
+  int sweeps = 0;
+
+  std::span<const std::int32_t> touched(std::int32_t t) const {
+    return {touch_pool.data() + touch_begin[static_cast<std::size_t>(t)], touch_count[static_cast<std::size_t>(t)]};
+  }
+  bool is_cut(std::int32_t t) const { return touch_count[static_cast<std::size_t>(t)] > 0; }
+
+  // Index of the coarse cube (global coarse indices) in the range, or -1 outside.
+  std::int64_t cube_index(std::int64_t ci, std::int64_t cj, std::int64_t ck) const {
+    const auto& r = forest.range();
+    if (ci < r.lo[0] || ci >= r.hi[0] || cj < r.lo[1] || cj >= r.hi[1] || ck < r.lo[2] || ck >= r.hi[2]) return -1;
+    return ((ck - r.lo[2]) * r.count(1) + (cj - r.lo[1])) * r.count(0) + (ci - r.lo[0]);
+  }
+  // Coarse cube holding tet t.
+  std::int64_t cube_of(std::int32_t t) const {
+    const auto& x = forest.tet(t);
+    return cube_index(x.cube[0] >> x.level, x.cube[1] >> x.level, x.cube[2] >> x.level);
+  }
+  std::span<const std::int32_t> candidates_of_cube(std::int64_t cube) const {
+    const auto b = static_cast<std::size_t>(cube_candidate_begin[static_cast<std::size_t>(cube)]);
+    const auto e = static_cast<std::size_t>(cube_candidate_begin[static_cast<std::size_t>(cube) + 1]);
+    return {cube_candidates.data() + b, e - b};
+  }
+  std::span<const std::int32_t> candidates_of_tet(std::int32_t t) const { return candidates_of_cube(cube_of(t)); }
+
+  // Closed axis-aligned bounding box of tet t, world coordinates.
+  Box3 box(std::int32_t t) const;
+};
+
+// Refines the coarse cubes of `range` (a partition box plus its ghost layer). Throws
+// MeshingError when the rules ask for a level beyond lattice.max_level.
+RefinedGrid3 refine3(const geometry::Oracle3& oracle, const grid::Lattice3& lattice,
+                     const grid::CellRange<3>& range);
+
+}  // namespace cisamr::samr

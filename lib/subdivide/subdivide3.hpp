@@ -1,0 +1,43 @@
+#pragma once
+// Subdivision in 3D: every leaf of the refined, snapped tet forest becomes tetrahedra
+// (lib/pipeline/README3.md):
+//   - a leaf with hanging edge midpoints (never cut, never deformed: rule R4) is closed
+//     by the optimal case tables of templates3.hpp;
+//   - a leaf whose vertices share a phase is kept;
+//   - a cut leaf (two vertices strictly in different phases) is split along the
+//     interface: cut nodes on its edges with a strict phase change, keyed by the edge's
+//     two lattice keys and computed on the segment oriented from the smaller key; quads
+//     split along the diagonal through their smallest point identity (key rule), so
+//     neighbours agree without communication.
+#include <cstdint>
+#include <vector>
+
+#include "geometry/oracle3.hpp"
+#include "grid/lattice.hpp"
+#include "radapt/radapt3.hpp"
+#include "samr/samr3.hpp"
+
+namespace cisamr::subdivide {
+
+struct Tets3 {
+  std::vector<Vec3> extra_points;       // points created here; node id = nodes.size() + index
+  std::vector<std::int32_t> tets;       // 4 node ids per tet, positively oriented
+  std::vector<std::int32_t> phase;      // phase index per tet
+  std::int64_t cut_tets = 0;            // leaves split along an interface
+  std::int64_t cut_nodes = 0;           // nodes created on cut edges
+  std::int64_t closed_tets = 0;         // leaves closed by the hanging-midpoint tables
+  std::int64_t steiner_points = 0;      // interior points of those closures
+  std::int64_t unresolved = 0;          // cut leaves with more than two phases (kept whole)
+  std::int64_t inverted = 0;            // output tets with non-positive volume
+  std::int64_t missing_crossings = 0;   // cut edges where the oracle found no crossing
+  // Worst aspect ratio of the output tets by origin: closures of hanging midpoints, leaves
+  // kept whole (maybe deformed by snapping), sub-tets of cut leaves.
+  double worst_closure = 0, worst_kept = 0, worst_split = 0;
+  std::int64_t kept_above_5 = 0, split_above_5 = 0;
+};
+
+// Tetrahedralises the leaves whose coarse cube lies in `owned` (the partition box).
+Tets3 subdivide3(const geometry::Oracle3& oracle, const samr::RefinedGrid3& grid, const radapt::Nodes3& nodes,
+                 const grid::CellRange<3>& owned);
+
+}  // namespace cisamr::subdivide
