@@ -53,12 +53,33 @@ TEST(InclusionIndex, LevelAwareMarginShrinksWithLevels) {
   EXPECT_NEAR(c.max[0] - c.min[0], 2 * std::get<geometry::Circle>(scene.inclusions[0].shape).radius + 4.0, 1e-12);
 }
 
+// The default ghost (no closure rounds: levels are settled by effective_levels2) loads
+// exactly the inclusions whose inflated box meets the grown box.
+TEST(GhostRegion, DefaultLoadsTheInclusionsMeetingTheGrownBox) {
+  const geometry::SceneDesc scene = testing::corner_scene();
+  const grid::Lattice2 lattice = scene_lattice2(scene, {});
+  const GhostRule rule;
+  ASSERT_EQ(rule.max_closure_rounds, 0);
+  const InclusionIndex2 index(scene, lattice, rule);
+  const grid::CellRange<2> box{{10, 6}, {17, 12}};
+  const GhostRegion2 region = ghost_region2(index, lattice, box, rule);
+  const Box2 seed{{10.0 - rule.box_margin_cells, 6.0 - rule.box_margin_cells},
+                  {17.0 + rule.box_margin_cells, 12.0 + rule.box_margin_cells}};
+  std::vector<std::int32_t> expected;
+  for (std::int32_t k = 0; k < index.size(); ++k)
+    if (boxes_overlap(index.inflated(k), seed)) expected.push_back(k);
+  EXPECT_EQ(region.inclusions, expected);
+  EXPECT_LT(region.inclusions.size(), scene.inclusions.size());
+}
+
+// The full closure, kept for comparison (--ghost-closure-rounds -1).
 TEST(GhostRegion, IsTheClosureOfMeetingInflatedBoxes) {
   const geometry::SceneDesc scene = testing::corner_scene();
   const grid::Lattice2 lattice = scene_lattice2(scene, {});
   for (bool level_aware : {true, false}) {
     GhostRule rule;
     rule.level_aware = level_aware;
+    rule.max_closure_rounds = -1;
     const InclusionIndex2 index(scene, lattice, rule);
     const grid::CellRange<2> box{{10, 6}, {17, 12}};
     const GhostRegion2 region = ghost_region2(index, lattice, box, rule);
