@@ -1,8 +1,6 @@
 #include "subdivide/subdivide2.hpp"
 
 #include <algorithm>
-#include <cstdio>
-#include <cstdlib>
 #include <bit>
 #include <limits>
 
@@ -227,10 +225,6 @@ class Subdivider {
       if (out_.unresolved_at.size() < 16)
         out_.unresolved_at.push_back({0.25 * (q.p[0][0] + q.p[1][0] + q.p[2][0] + q.p[3][0]),
                                       0.25 * (q.p[0][1] + q.p[1][1] + q.p[2][1] + q.p[3][1])});
-      if (std::getenv("CISAMR_DEBUG_UNRESOLVED"))
-        for (int k = 0; k < 4; ++k)
-          std::fprintf(stderr, "  corner %d (%.12g, %.12g) mask %llx snapped %d\n", k, q.p[k][0], q.p[k][1],
-                       static_cast<unsigned long long>(q.m[k]), nodes_.snapped[static_cast<std::size_t>(q.id[k])]);
       emit_split(q, templates2::kDiagonal02, candidates, true);
       return;
     }
