@@ -14,6 +14,7 @@
 #include "commands.hpp"
 #include "core/error.hpp"
 #include "geometry/oracle2.hpp"
+#include "geometry/oracle3.hpp"
 #include "io/atomic_file.hpp"
 #include "io/mesh_io.hpp"
 #include "io/mesh_svg.hpp"
@@ -25,6 +26,7 @@
 #include "parallel/output.hpp"
 #include "parallel/session.hpp"
 #include "pipeline/pipeline.hpp"
+#include "pipeline/pipeline3.hpp"
 #include "quality/quality.hpp"
 
 namespace cisamr::app {
@@ -137,6 +139,68 @@ nlohmann::json report_json(const MeshArgs& args, const geometry::SceneDesc& scen
 
 // The parallel mesher (lib/parallel). Collective: every rank runs all of it; only rank 0
 // prints and writes the report. Errors are agreed between ranks inside lib/parallel.
+// 3D, one process: the first version of the 3D mesher (lib/pipeline/README3.md). It is
+// conforming but does not yet meet the aspect-ratio bound of 5 everywhere (no face
+// swapping yet): the exit status says so (3) whenever a tetrahedron exceeds it.
+void run_sequential3(const MeshArgs& args, const geometry::SceneDesc& scene, const GlobalFlags& flags, int& exit_code,
+                     std::chrono::steady_clock::time_point start) {
+  progress(flags, "building the 3D geometry oracle");
+  const geometry::Oracle3 oracle(scene);
+  pipeline::Options options;
+  options.alpha = args.alpha;
+  options.extra_levels = args.extra_levels;
+  progress(flags, "meshing (SAMR, r-adaptivity, subdivision)");
+  pipeline::Result3 result = pipeline::mesh3_with_stats(oracle, options);
+  const double bound = args.bound > 0 ? args.bound : 5.0;
+  quality::AspectStats aspect;
+  {
+    ScopedPhase timer(&result.stats.times, "quality");
+    aspect = quality::aspect_statistics(result.mesh, bound);
+  }
+  progress(flags, "writing the mesh");
+  {
+    ScopedPhase timer(&result.stats.times, "write");
+    io::write_mesh(args.output, result.mesh, scene.phases);
+  }
+  const double total = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (!args.report.empty()) {
+    nlohmann::json j;
+    j["format"] = "cisamr-report/1";
+    j["scene"] = args.scene;
+    j["output"] = args.output;
+    j["dimension"] = 3;
+    j["nodes"] = result.mesh.node_count();
+    j["elements"] = result.mesh.cell_count();
+    j["aspect_ratio"] = {{"max", aspect.max},           {"mean", aspect.mean},
+                         {"bound", aspect.bound},       {"above_bound", aspect.above_bound},
+                         {"bin_edges", aspect.bin_edges}, {"histogram", aspect.histogram},
+                         {"min_dihedral_deg", aspect.min_angle_deg}, {"max_dihedral_deg", aspect.max_angle_deg}};
+    j["algorithm"] = {{"alpha", args.alpha},
+                      {"extra_levels", args.extra_levels},
+                      {"coarse_cubes", result.stats.coarse_cubes},
+                      {"leaves", result.stats.leaves},
+                      {"snapped_nodes", result.stats.snapped_nodes},
+                      {"cut_tets", result.stats.cut_tets},
+                      {"closed_tets", result.stats.closed_tets},
+                      {"unresolved", result.stats.unresolved},
+                      {"inverted", result.stats.inverted}};
+    nlohmann::json times = nlohmann::json::object();
+    for (const auto& [name, seconds] : result.stats.times.phases()) times[name] = seconds;
+    j["timings_s"] = times;
+    j["total_s"] = total;
+    io::AtomicFile file(args.report);
+    file.write(j.dump(2) + "\n");
+    file.commit();
+  }
+  if (!flags.quiet)
+    std::printf("%s: %zu nodes, %zu tetrahedra, max aspect ratio %.3f (bound %.1f, %zu above), %.3f s\n",
+                args.output.c_str(), result.mesh.node_count(), result.mesh.cell_count(), aspect.max, bound,
+                aspect.above_bound, total);
+  if (flags.verbose)
+    for (const auto& [name, seconds] : result.stats.times.phases()) std::printf("  %-10s %8.3f s\n", name.c_str(), seconds);
+  exit_code = aspect.above_bound > 0 ? 3 : 0;
+}
+
 void run_parallel(const MeshArgs& args, const GlobalFlags& flags, int& exit_code) {
   const Comm& comm = parallel::world();
   const bool root = comm.rank() == 0;
@@ -333,8 +397,10 @@ void add_mesh_command(CLI::App& app, GlobalFlags& flags, int& exit_code) {
     io::mesh_format_of(args->output);  // fail on a bad extension before any work
     progress(flags, "reading the scene");
     const geometry::SceneDesc scene = io::read_scene(args->scene);
-    if (scene.dimension != 2)
-      throw InputError(args->scene, "dimension", "3D meshing is not available in this version (2D only)");
+    if (scene.dimension == 3) {
+      run_sequential3(*args, scene, flags, exit_code, start);
+      return;
+    }
     progress(flags, "building the geometry oracle");
     const geometry::Oracle2 oracle(scene);
     pipeline::Options options;

@@ -148,4 +148,25 @@ TEST_F(Cli, MeshesEveryFormatAndCertifies) {
   EXPECT_NE(help.output.find("--report"), std::string::npos);
 }
 
+// 3D: the first version of the mesher runs from the command line; it is conforming, and
+// the exit status reports tetrahedra above the bound of 5 (3) until face swapping lands.
+TEST_F(Cli, Meshes3DScenesAndReportsTheBound) {
+  const std::string scene = std::string(CISAMR_SOURCE_DIR) + "/data/examples/spheres3d.json";
+  const std::string out = (dir / "s3.vtu").string();
+  const CommandResult r = run("mesh " + scene + " -o " + out + " --report " + (dir / "s3.report").string());
+  EXPECT_TRUE(r.exit_code == 0 || r.exit_code == 3) << r.output;
+  ASSERT_TRUE(fs::exists(out));
+  EXPECT_NE(r.output.find("tetrahedra"), std::string::npos) << r.output;
+  std::ifstream report(dir / "s3.report");
+  const std::string text((std::istreambuf_iterator<char>(report)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("\"dimension\": 3"), std::string::npos) << text;
+  // Conformity of the written file, independently of the aspect ratio.
+  const CommandResult c = run("certify " + out + " --bound 1000");
+  EXPECT_EQ(c.exit_code, 0) << c.output;
+  // The parallel mesher is 2D only: a clear error, no output.
+  const CommandResult p = run("mesh " + scene + " -o " + (dir / "p.vtu").string() + " --partitions 2");
+  EXPECT_EQ(p.exit_code, 2) << p.output;
+  EXPECT_FALSE(fs::exists(dir / "p.pvtu"));
+}
+
 }  // namespace
