@@ -104,28 +104,8 @@ nlohmann::json report_json(const MeshArgs& args, const geometry::SceneDesc& scen
     phases.push_back({{"id", ph.id}, {"name", ph.name}, {"void", ph.is_void}, {"elements", count}, {"measure", area}});
   }
   j["phases"] = phases;
-  j["aspect_ratio"] = {{"max", aspect.max},
-                       {"mean", aspect.mean},
-                       {"bound", aspect.bound},
-                       {"above_bound", aspect.above_bound},
-                       {"bin_edges", aspect.bin_edges},
-                       {"histogram", aspect.histogram},
-                       {"min_angle_deg", aspect.min_angle_deg},
-                       {"max_angle_deg", aspect.max_angle_deg}};
-  j["algorithm"] = {{"alpha", args.alpha},
-                    {"extra_levels", args.extra_levels},
-                    {"coarse_cells", stats.coarse_cells},
-                    {"leaves", stats.leaves},
-                    {"refinements", stats.refinements},
-                    {"lattice_nodes", stats.lattice_nodes},
-                    {"snapped_nodes", stats.snapped_nodes},
-                    {"cut_quads", stats.cut_quads},
-                    {"double_diagonal_splits", stats.double_diagonal},
-                    {"hanging_node_cells", stats.hanging_cells},
-                    {"unresolved_quads", stats.unresolved},
-                    {"finest_level", stats.max_level},
-                    {"collapsed_features", stats.collapsed},
-                    {"max_collapse_deviation", stats.max_collapse_deviation}};
+  j["aspect_ratio"] = aspect_json(aspect);
+  j["algorithm"] = algorithm_json(args, stats);
   nlohmann::json times = nlohmann::json::object();
   for (const auto& [name, seconds] : stats.times.phases())
     times[name] = {{"min", seconds}, {"max", seconds}, {"mean", seconds}};
@@ -171,10 +151,7 @@ void run_sequential3(const MeshArgs& args, const geometry::SceneDesc& scene, con
     j["dimension"] = 3;
     j["nodes"] = result.mesh.node_count();
     j["elements"] = result.mesh.cell_count();
-    j["aspect_ratio"] = {{"max", aspect.max},           {"mean", aspect.mean},
-                         {"bound", aspect.bound},       {"above_bound", aspect.above_bound},
-                         {"bin_edges", aspect.bin_edges}, {"histogram", aspect.histogram},
-                         {"min_dihedral_deg", aspect.min_angle_deg}, {"max_dihedral_deg", aspect.max_angle_deg}};
+    j["aspect_ratio"] = aspect_json(aspect);  // angles are dihedral angles in 3D
     j["algorithm"] = {{"alpha", args.alpha},
                       {"extra_levels", args.extra_levels},
                       {"coarse_cubes", result.stats.coarse_cubes},
