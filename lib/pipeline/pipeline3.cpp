@@ -94,10 +94,14 @@ Result3 run3(const geometry::Oracle3& oracle, const grid::Lattice3& lattice, con
     }
     m.coords.resize(3 * static_cast<std::size_t>(next));
     result.node_key.resize(static_cast<std::size_t>(next));
+    result.node_identity.resize(static_cast<std::size_t>(next));
     for (std::size_t n = 0; n < total; ++n) {
       const std::int32_t id = new_id[n];
       if (id < 0) continue;
       result.node_key[static_cast<std::size_t>(id)] = n < lattice_count ? nodes.key[n] : Result3::kNotLatticeNode;
+      result.node_identity[static_cast<std::size_t>(id)] =
+          n < lattice_count ? std::array<std::uint64_t, 2>{nodes.key[n], nodes.key[n]}
+                            : tets.extra_identity[n - lattice_count];
       const Vec3& p = n < lattice_count ? nodes.position[n] : tets.extra_points[n - lattice_count];
       for (int d = 0; d < 3; ++d) m.coords[3 * static_cast<std::size_t>(id) + static_cast<std::size_t>(d)] = p[d];
     }

@@ -1,6 +1,7 @@
 #pragma once
 // The sequential 3D mesher: box (+ghost) → tet forest → SAMR → r-adaptivity →
 // subdivision → mesh (lib/pipeline/README3.md). Face swapping is not in yet.
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -34,6 +35,10 @@ struct Result3 {
   // closure Steiner points.
   std::vector<std::uint64_t> node_key;
   static constexpr std::uint64_t kNotLatticeNode = ~std::uint64_t{0};
+  // Per output node, an identity that every partition computes alike, for merging: a
+  // lattice node is (key, key), a cut node its edge's (smaller key, larger key), a closure
+  // Steiner point (kNotLatticeNode, kNotLatticeNode) (interior to one leaf, never shared).
+  std::vector<std::array<std::uint64_t, 2>> node_identity;
   Stats3 stats;
 };
 

@@ -75,8 +75,10 @@ class Subdivider3 {
     const auto n = static_cast<std::int32_t>(nodes_.key.size());
     return id < n ? nodes_.mask[static_cast<std::size_t>(id)] : extra_mask_[static_cast<std::size_t>(id - n)];
   }
-  std::int32_t add_point(const Vec3& p, PhaseMask mask) {
+  std::int32_t add_point(const Vec3& p, PhaseMask mask, LatticeKey3 key_lo = Tets3::kInteriorPoint,
+                         LatticeKey3 key_hi = Tets3::kInteriorPoint) {
     out_.extra_points.push_back(p);
+    out_.extra_identity.push_back({key_lo, key_hi});
     extra_mask_.push_back(mask);
     return static_cast<std::int32_t>(nodes_.key.size() + out_.extra_points.size() - 1);
   }
@@ -204,7 +206,7 @@ class Subdivider3 {
       for (int d = 0; d < 3; ++d) x[d] = 0.5 * (pa[d] + pb[d]);
       ++out_.missing_crossings;
     }
-    const std::int32_t id = add_point(x, mask);
+    const std::int32_t id = add_point(x, mask, k.first, k.second);
     ++out_.cut_nodes;
     cut_node_.emplace(k, id);
     return id;

@@ -9,6 +9,7 @@
 //     two lattice keys and computed on the segment oriented from the smaller key; quads
 //     split along the diagonal through their smallest point identity (key rule), so
 //     neighbours agree without communication.
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -21,6 +22,11 @@ namespace cisamr::subdivide {
 
 struct Tets3 {
   std::vector<Vec3> extra_points;       // points created here; node id = nodes.size() + index
+  // Per extra point, the identity every partition computes alike: a cut node is its edge's
+  // (smaller key, larger key); a closure Steiner point, interior to one leaf, is
+  // (kInteriorPoint, kInteriorPoint) and never shared.
+  std::vector<std::array<grid::LatticeKey3, 2>> extra_identity;
+  static constexpr grid::LatticeKey3 kInteriorPoint = ~grid::LatticeKey3{0};
   std::vector<std::int32_t> tets;       // 4 node ids per tet, positively oriented
   std::vector<std::int32_t> phase;      // phase index per tet
   std::int64_t cut_tets = 0;            // leaves split along an interface
