@@ -28,7 +28,7 @@ grid::Lattice3 make_lattice3(const geometry::Oracle3& oracle, const Options& opt
 }
 
 Result3 run3(const geometry::Oracle3& oracle, const grid::Lattice3& lattice, const grid::CellRange<3>& box,
-             int ghost, const Options& options, int partition_id) {
+             int ghost, const Options& options, int partition_id, std::span<const int> levels) {
   Result3 result;
   Stats3& stats = result.stats;
   grid::CellRange<3> range = box;
@@ -38,7 +38,7 @@ Result3 run3(const geometry::Oracle3& oracle, const grid::Lattice3& lattice, con
   }
   samr::RefinedGrid3 grid = [&] {
     ScopedPhase timer(&stats.times, "samr");
-    return samr::refine3(oracle, lattice, range);
+    return samr::refine3(oracle, lattice, range, levels);
   }();
   stats.coarse_cubes = range.count(0) * range.count(1) * range.count(2);
   stats.refinements = grid.refinements;

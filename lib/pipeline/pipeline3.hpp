@@ -3,6 +3,7 @@
 // subdivision → mesh (lib/pipeline/README3.md). Face swapping is not in yet.
 #include <array>
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "core/timer.hpp"
@@ -48,9 +49,11 @@ struct Result3 {
 grid::Lattice3 make_lattice3(const geometry::Oracle3& oracle, const Options& options);
 
 // Meshes the coarse cubes of `box`, using `ghost` extra cubes on each side (clipped to
-// the domain). Tets of void phases are dropped; unused nodes removed.
+// the domain). Tets of void phases are dropped; unused nodes removed. `levels`: the level
+// rule R1 asks of each of the oracle's inclusions (empty: their own levels); a partition
+// passes the levels computed over the whole scene.
 Result3 run3(const geometry::Oracle3& oracle, const grid::Lattice3& lattice, const grid::CellRange<3>& box,
-             int ghost, const Options& options, int partition_id = 0);
+             int ghost, const Options& options, int partition_id = 0, std::span<const int> levels = {});
 
 // The whole domain in one box.
 Result3 mesh3_with_stats(const geometry::Oracle3& oracle, const Options& options = {});

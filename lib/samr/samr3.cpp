@@ -1,6 +1,7 @@
 #include "samr/samr3.hpp"
 
 #include <algorithm>
+#include <stdexcept>
 
 #include "core/error.hpp"
 #include "grid/key_map.hpp"
@@ -56,7 +57,8 @@ const std::vector<std::array<int, 4>>& quarter_probes() {
 
 class Refiner {
  public:
-  Refiner(const geometry::Oracle3& oracle, RefinedGrid3& g) : oracle_(oracle), g_(g) {}
+  Refiner(const geometry::Oracle3& oracle, RefinedGrid3& g, std::span<const int> levels)
+      : oracle_(oracle), g_(g), levels_(levels) {}
 
   void run() {
     const int max_level = g_.forest.lattice().max_level;
@@ -87,6 +89,7 @@ class Refiner {
  private:
   const geometry::Oracle3& oracle_;
   RefinedGrid3& g_;
+  std::span<const int> levels_;
   std::vector<int> groups_;
 
   bool must_refine(std::int32_t t, const KeySet& nodes, const KeySet& movable) {
@@ -95,7 +98,8 @@ class Refiner {
     if (g_.is_cut(t)) {
       groups_.clear();
       for (std::int32_t k : g_.touched(t)) {
-        if (level < oracle_.levels_of(k)) return true;  // R1
+        if (level < (levels_.empty() ? oracle_.levels_of(k) : levels_[static_cast<std::size_t>(k)]))
+          return true;  // R1
         const int group = oracle_.interface_group(k);
         if (std::find(groups_.begin(), groups_.end(), group) == groups_.end()) groups_.push_back(group);
       }
@@ -151,7 +155,9 @@ Box3 RefinedGrid3::box(std::int32_t t) const {
 }
 
 RefinedGrid3 refine3(const geometry::Oracle3& oracle, const grid::Lattice3& lattice,
-                     const grid::CellRange<3>& range) {
+                     const grid::CellRange<3>& range, std::span<const int> levels) {
+  if (!levels.empty() && static_cast<int>(levels.size()) != oracle.inclusion_count())
+    throw std::invalid_argument("refine3: one level per inclusion expected");
   RefinedGrid3 g{grid::TetForest(lattice, range), {}, {}, {}, {}, {}, 0, 0};
   const std::int64_t cubes = range.count(0) * range.count(1) * range.count(2);
   g.cube_candidate_begin.reserve(static_cast<std::size_t>(cubes) + 1);
@@ -185,7 +191,7 @@ RefinedGrid3 refine3(const geometry::Oracle3& oracle, const grid::Lattice3& latt
       }
     g.touch_count[static_cast<std::size_t>(r)] = n;
   }
-  Refiner(oracle, g).run();
+  Refiner(oracle, g, levels).run();
   return g;
 }
 

@@ -63,8 +63,10 @@ struct RefinedGrid3 {
 };
 
 // Refines the coarse cubes of `range` (a partition box plus its ghost layer). Throws
-// MeshingError when the rules ask for a level beyond lattice.max_level.
+// MeshingError when the rules ask for a level beyond lattice.max_level. `levels[k]` is the
+// level rule R1 asks of inclusion k (the oracle's index), as pipeline::effective_levels
+// computes them for partitions; empty: the inclusions' own levels.
 RefinedGrid3 refine3(const geometry::Oracle3& oracle, const grid::Lattice3& lattice,
-                     const grid::CellRange<3>& range);
+                     const grid::CellRange<3>& range, std::span<const int> levels = {});
 
 }  // namespace cisamr::samr
