@@ -57,9 +57,20 @@ class TetForest {
   // -1 when that tet is outside the range. Point location on the nested honeycombs: the
   // descent follows the target's centroid, which lies inside exactly one tet per level.
   std::int32_t find(int level, const TetCode& target) const;
+  // find(), starting from the ancestors of tet `start` instead of the roots: the same
+  // answer, found faster when the target is near `start`.
+  std::int32_t find_near(std::int32_t start, int level, const TetCode& target) const;
   // find() of the honeycomb tet of t's level across face f (opposite vertex f): the
   // neighbour at t's level, a coarser leaf, or -1 outside the range.
   std::int32_t face_neighbour(std::int32_t t, int face) const;
+  // Appends the leaves whose closure holds the midpoint p of the edge (a, b) of the
+  // level-`level` honeycomb (a, b on the finest lattice, level < max_level): the leaves of
+  // that level or coarser around the edge, and the finer leaves with p as a vertex. A
+  // coarse leaf may be appended more than once. Used by SAMR to find the leaves whose
+  // rules can change when p becomes a node or a node that may move. `near`: a tet near
+  // the edge to start the searches from (find_near), or -1.
+  void leaves_at_midpoint(const LatticePoint3& a, const LatticePoint3& b, int level, std::int32_t near,
+                          std::vector<std::int32_t>& out) const;
 
   // Splits leaf t into its 7 or 12 children; returns the index of the first child.
   std::int32_t refine(std::int32_t t);
@@ -69,6 +80,13 @@ class TetForest {
   CellRange<3> range_;
   std::int32_t root_count_ = 0;
   std::vector<Tet> tets_;
+
+  // The deepest tet with level ≤ `level` below t on the way to the level-`level` tet whose
+  // centroid (×4, level coordinates) is c4; t must contain it.
+  std::int32_t descend(std::int32_t t, int level, const LatticePoint3& c4) const;
+  // Appends the leaves below non-leaf t that have the fine point p as a vertex; p must be a
+  // vertex or an edge midpoint of t.
+  void leaves_with_vertex(std::int32_t t, const LatticePoint3& p, std::vector<std::int32_t>& out) const;
 };
 
 }  // namespace cisamr::grid

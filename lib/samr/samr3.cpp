@@ -4,7 +4,6 @@
 #include <stdexcept>
 
 #include "core/error.hpp"
-#include "grid/key_map.hpp"
 
 namespace cisamr::samr {
 namespace {
@@ -13,15 +12,75 @@ using grid::LatticeKey3;
 using grid::LatticePoint3;
 namespace tet = grid::tet;
 
-// A set of lattice keys on top of the open-addressing map.
-struct KeySet {
-  grid::KeyMap map;
-  explicit KeySet(std::size_t expected) : map(expected) {}
-  void insert(LatticeKey3 k) {
-    bool inserted = false;
-    map.insert(k, 1, inserted);
+constexpr std::int64_t kCandidateBlock = 4;  // coarse cubes per side of one AABB-tree query
+
+// The nodes of the forest finer than level 0 and, per node, the number of cut leaves having
+// it as a vertex (rule R4: a node with a positive count may move). Nodes are the vertices of
+// every tet created so far: refining keeps a tet's vertices as vertices of its children, so
+// these are also the vertices of the leaves. The level-0 nodes (every background lattice
+// point of the range) enter only when a cut leaf has them as a vertex: the rules ask
+// whether a point is a node only for points finer than level 0. Open addressing with linear
+// probing.
+class NodeTable {
+ public:
+  explicit NodeTable(std::size_t expected) { rehash(capacity_for(expected)); }
+
+  // Adds `cut_leaves` to the count of node `key`, inserting the node if it is absent;
+  // returns the count before, -1 when it was absent.
+  std::int32_t insert(LatticeKey3 key, std::int32_t cut_leaves = 0) {
+    if ((size_ + 1) * 2 > entries_.size()) rehash(entries_.size() * 2);
+    std::size_t i = slot(key);
+    for (; entries_[i].key != kEmpty; i = (i + 1) & mask_)
+      if (entries_[i].key == key) {
+        const std::int32_t before = entries_[i].cut_leaves;
+        entries_[i].cut_leaves += cut_leaves;
+        return before;
+      }
+    entries_[i] = {key, cut_leaves};
+    ++size_;
+    return -1;
   }
-  bool contains(LatticeKey3 k) const { return map.find(k) != grid::KeyMap::kNone; }
+  // Cut leaves having node `key` as a vertex; -1 when `key` is no node.
+  std::int32_t cut_leaves(LatticeKey3 key) const {
+    for (std::size_t i = slot(key);; i = (i + 1) & mask_) {
+      if (entries_[i].key == key) return entries_[i].cut_leaves;
+      if (entries_[i].key == kEmpty) return -1;
+    }
+  }
+  bool contains(LatticeKey3 key) const { return cut_leaves(key) >= 0; }
+
+ private:
+  // No node has this key: coordinates take 63 bits.
+  static constexpr LatticeKey3 kEmpty = ~LatticeKey3{0};
+  struct Entry {
+    LatticeKey3 key = kEmpty;
+    std::int32_t cut_leaves = 0;
+  };
+  std::vector<Entry> entries_;
+  std::size_t mask_ = 0, size_ = 0;
+
+  static std::size_t capacity_for(std::size_t n) {
+    std::size_t c = 16;
+    while (c < 2 * n) c <<= 1;
+    return c;
+  }
+  std::size_t slot(LatticeKey3 key) const {
+    key ^= key >> 33;
+    key *= 0xff51afd7ed558ccdULL;
+    key ^= key >> 33;
+    return static_cast<std::size_t>(key) & mask_;
+  }
+  void rehash(std::size_t capacity) {
+    std::vector<Entry> old(capacity);
+    old.swap(entries_);
+    mask_ = capacity - 1;
+    for (const Entry& e : old) {
+      if (e.key == kEmpty) continue;
+      std::size_t i = slot(e.key);
+      while (entries_[i].key != kEmpty) i = (i + 1) & mask_;
+      entries_[i] = e;
+    }
+  }
 };
 
 LatticePoint3 weighted(const std::array<LatticePoint3, 4>& v, const std::array<int, 4>& w, int denominator) {
@@ -30,54 +89,71 @@ LatticePoint3 weighted(const std::array<LatticePoint3, 4>& v, const std::array<i
   return p;
 }
 
+// Edge midpoints of a tet, as weights /2 of its vertices.
+constexpr std::array<std::array<int, 4>, 6> kMidpointWeights = [] {
+  std::array<std::array<int, 4>, 6> w{};
+  for (int e = 0; e < 6; ++e) w[e][tet::kEdges[e][0]] = 1, w[e][tet::kEdges[e][1]] = 1;
+  return w;
+}();
+
 // Level-(l+2) lattice points on the closure of a level-l tet other than its vertices and
 // edge midpoints, as weights /4 of its vertices: two quarter points per edge, three
 // interior points per face. Any finer node in the closure implies one of these is a node.
-const std::vector<std::array<int, 4>>& quarter_probes() {
-  static const std::vector<std::array<int, 4>> probes = [] {
-    std::vector<std::array<int, 4>> p;
-    for (const auto& e : tet::kEdges) {
-      std::array<int, 4> w{};
-      w[e[0]] = 3, w[e[1]] = 1;
-      p.push_back(w);
-      w[e[0]] = 1, w[e[1]] = 3;
-      p.push_back(w);
+constexpr std::array<std::array<int, 4>, 24> kQuarterProbes = [] {
+  std::array<std::array<int, 4>, 24> p{};
+  int n = 0;
+  for (const auto& e : tet::kEdges) {
+    p[n][e[0]] = 3, p[n][e[1]] = 1, ++n;
+    p[n][e[0]] = 1, p[n][e[1]] = 3, ++n;
+  }
+  for (const auto& f : tet::kFaces)
+    for (int i = 0; i < 3; ++i, ++n) {
+      p[n][f[0]] = 1, p[n][f[1]] = 1, p[n][f[2]] = 1;
+      p[n][f[i]] = 2;
     }
-    for (const auto& f : tet::kFaces)
-      for (int i = 0; i < 3; ++i) {
-        std::array<int, 4> w{};
-        w[f[0]] = 1, w[f[1]] = 1, w[f[2]] = 1;
-        w[f[i]] = 2;
-        p.push_back(w);
-      }
-    return p;
-  }();
-  return probes;
-}
+  return p;
+}();
 
+// Synchronous sweeps (samr3.hpp) that look only at the leaves whose rules may have changed.
+// Synchronous because R4 is not monotone: a node stops being a vertex of a cut leaf when
+// that leaf is refined into children that are uncut at the node, so refining as soon as a
+// rule fires reaches another fixed point (README.md, 3D).
+// The look-ups suffice: a leaf's rules read only its cut list, the nodes on its closure and
+// the cut-leaf counts of its vertices. Refining t adds nodes only at its edge midpoints and
+// centre and raises counts only there (its vertices' counts can only drop: if t is cut they
+// were positive, otherwise its children are uncut). So a leaf one sweep did not mark can
+// be marked by the next only if it is a new child or its closure holds a midpoint that
+// became a node or got its first cut leaf; the next sweep looks at those, marks what a
+// sweep over all leaves would mark, and refining the marks in index order builds the same
+// forest array.
 class Refiner {
  public:
   Refiner(const geometry::Oracle3& oracle, RefinedGrid3& g, std::span<const int> levels)
-      : oracle_(oracle), g_(g), levels_(levels) {}
+      : oracle_(oracle), g_(g), levels_(levels), nodes_(g.touch_pool.size()) {}
 
   void run() {
     const int max_level = g_.forest.lattice().max_level;
+    const std::int32_t roots = g_.forest.root_count();
+    queued_.assign(static_cast<std::size_t>(roots), 0);
+    finest_.assign(static_cast<std::size_t>(roots / 5), 0);
+    finest_near_.assign(static_cast<std::size_t>(roots / 5), 0);
+    for (std::int32_t r = 0; r < roots; ++r) {
+      if (!g_.is_cut(r)) continue;
+      for (LatticeKey3 k : g_.forest.vertex_keys(r)) nodes_.insert(k, 1);
+      // First sweep: only the cut roots can fire (R1, R2); B and R4 need nodes finer than
+      // level 0, and there are none yet.
+      queue_.push_back(r);
+    }
     std::vector<std::int32_t> marked;
     while (true) {
       ++g_.sweeps;
-      const std::size_t n = g_.forest.size();
-      KeySet nodes(n), movable(n / 4 + 16);
-      for (std::int32_t t = 0; t < static_cast<std::int32_t>(n); ++t) {
-        if (!g_.forest.is_leaf(t)) continue;
-        const auto keys = g_.forest.vertex_keys(t);
-        for (LatticeKey3 k : keys) nodes.insert(k);
-        if (g_.is_cut(t))
-          for (LatticeKey3 k : keys) movable.insert(k);
-      }
       marked.clear();
-      for (std::int32_t t = 0; t < static_cast<std::int32_t>(n); ++t)
-        if (g_.forest.is_leaf(t) && must_refine(t, nodes, movable)) marked.push_back(t);
+      for (std::int32_t t : queue_)
+        if (g_.forest.is_leaf(t) && must_refine(t)) marked.push_back(t);
       if (marked.empty()) break;
+      std::sort(marked.begin(), marked.end());
+      ++sweep_;
+      queue_.clear();
       for (std::int32_t t : marked) {
         if (g_.forest.tet(t).level >= max_level)
           throw MeshingError("SAMR rules ask for a level beyond the finest one (3D)");
@@ -90,9 +166,44 @@ class Refiner {
   const geometry::Oracle3& oracle_;
   RefinedGrid3& g_;
   std::span<const int> levels_;
+  NodeTable nodes_;
   std::vector<int> groups_;
+  // The leaves the next sweep looks at, each once: queued_[t] is the last sweep t was
+  // queued for.
+  std::vector<std::int32_t> queue_, around_;
+  std::vector<std::int32_t> queued_;
+  std::int32_t sweep_ = 0;
 
-  bool must_refine(std::int32_t t, const KeySet& nodes, const KeySet& movable) {
+  // Per coarse cube of the range: the finest level of its tets (finest_) and of the tets of
+  // the 3×3×3 cubes around it (finest_near_), which bounds the level of any node on the
+  // closure of a tet in the cube.
+  std::vector<std::uint8_t> finest_, finest_near_;
+
+  // Tets of `level` now exist in the coarse cube of tet t.
+  void note_level(std::int32_t t, int level) {
+    const auto& x = g_.forest.tet(t);
+    const std::int64_t ci = x.cube[0] >> x.level, cj = x.cube[1] >> x.level, ck = x.cube[2] >> x.level;
+    const auto cube = static_cast<std::size_t>(g_.cube_index(ci, cj, ck));
+    if (finest_[cube] >= level) return;
+    finest_[cube] = static_cast<std::uint8_t>(level);
+    for (int dk = -1; dk <= 1; ++dk)
+      for (int dj = -1; dj <= 1; ++dj)
+        for (int di = -1; di <= 1; ++di) {
+          const std::int64_t n = g_.cube_index(ci + di, cj + dj, ck + dk);
+          if (n < 0) continue;
+          std::uint8_t& f = finest_near_[static_cast<std::size_t>(n)];
+          f = std::max(f, static_cast<std::uint8_t>(level));
+        }
+  }
+
+  void enqueue(std::int32_t t) {
+    std::int32_t& q = queued_[static_cast<std::size_t>(t)];
+    if (q == sweep_) return;
+    q = sweep_;
+    queue_.push_back(t);
+  }
+
+  bool must_refine(std::int32_t t) {
     const int level = g_.forest.tet(t).level;
     const int max_level = g_.forest.lattice().max_level;
     if (g_.is_cut(t)) {
@@ -105,41 +216,98 @@ class Refiner {
       }
       if (level < max_level && groups_.size() >= 2) return true;  // R2
     }
-    if (level + 1 > max_level) return false;  // nothing finer can exist
+    // Nodes finer than level l lie on t's closure only if tets finer than l exist near it.
+    const int finest = finest_near_[static_cast<std::size_t>(g_.cube_of(t))];
+    if (level + 1 > finest) return false;
     const auto v = g_.forest.fine_vertices(t);
     // B: no finer node in the closure than the edge midpoints.
-    if (level + 2 <= max_level)
-      for (const auto& w : quarter_probes())
-        if (nodes.contains(grid::key3(weighted(v, w, 4)))) return true;
+    if (level + 2 <= finest)
+      for (const auto& w : kQuarterProbes)
+        if (nodes_.contains(grid::key3(weighted(v, w, 4)))) return true;
     // R4: a leaf around a node that may move carries no hanging midpoint.
     bool near_cut = g_.is_cut(t);
-    for (int i = 0; i < 4 && !near_cut; ++i) near_cut = movable.contains(grid::key3(v[i]));
+    for (int i = 0; i < 4 && !near_cut; ++i) near_cut = nodes_.cut_leaves(grid::key3(v[i])) > 0;
     if (near_cut)
-      for (const auto& e : tet::kEdges) {
-        std::array<int, 4> w{};
-        w[e[0]] = 1, w[e[1]] = 1;
-        if (nodes.contains(grid::key3(weighted(v, w, 2)))) return true;
-      }
+      for (const auto& w : kMidpointWeights)
+        if (nodes_.contains(grid::key3(weighted(v, w, 2)))) return true;
     return false;
   }
 
   void refine(std::int32_t t) {
+    const auto v = g_.forest.fine_vertices(t);
+    const int level = g_.forest.tet(t).level;
+    const bool corner = g_.forest.kind(t) == tet::Kind::corner;
+    const int children = g_.forest.child_count(t);
     const std::int32_t first = g_.forest.refine(t);
     ++g_.refinements;
+    note_level(t, level + 1);
+    queued_.resize(g_.forest.size(), 0);
+
+    // The points of t's refinement template (vertices, edge midpoints, centre).
+    std::array<LatticePoint3, 11> points{};
+    for (int i = 0; i < 4; ++i) points[i] = v[i];
+    for (int e = 0; e < 6; ++e)
+      for (int d = 0; d < 3; ++d)
+        points[tet::midpoint(e)][d] = (v[tet::kEdges[e][0]][d] + v[tet::kEdges[e][1]][d]) / 2;
+    for (int d = 0; d < 3; ++d) points[tet::kCentroid][d] = (v[0][d] + v[1][d] + v[2][d] + v[3][d]) / 4;
+
+    // Cut lists of the children: the parent's inclusions that touch the child's box. Several
+    // children share a box (a corner tet's 7 children have 4 boxes, a regular tet's 12
+    // have 8), and boundary_touches depends only on the inclusion and the box.
     const std::int32_t begin = g_.touch_begin[static_cast<std::size_t>(t)];
     const std::uint16_t count = g_.touch_count[static_cast<std::size_t>(t)];
-    for (int c = 0; c < g_.forest.child_count(t); ++c) {
-      const Box3 box = g_.box(first + c);
+    std::array<std::pair<LatticePoint3, LatticePoint3>, 12> bounds{};
+    std::array<int, 11> cut_delta{};  // change of each point's count of cut leaves
+    if (count > 0)
+      for (int i = 0; i < 4; ++i) cut_delta[i] = -1;
+    for (int c = 0; c < children; ++c) {
+      const auto& child_points = corner ? tet::kCornerChildren[c] : tet::kRegularChildren[c];
+      LatticePoint3 lo = points[child_points[0]], hi = lo;
+      for (int i = 1; i < 4; ++i)
+        for (int d = 0; d < 3; ++d)
+          lo[d] = std::min(lo[d], points[child_points[i]][d]), hi[d] = std::max(hi[d], points[child_points[i]][d]);
+      bounds[c] = {lo, hi};
+      int same = 0;
+      while (same < c && bounds[same] != bounds[c]) ++same;
       g_.touch_begin.push_back(static_cast<std::int32_t>(g_.touch_pool.size()));
       std::uint16_t n = 0;
-      for (std::uint16_t i = 0; i < count; ++i) {
-        const std::int32_t k = g_.touch_pool[static_cast<std::size_t>(begin + i)];
-        if (oracle_.boundary_touches(k, box)) {
+      if (same < c) {  // a sibling with the same box: same list
+        const std::int32_t from = g_.touch_begin[static_cast<std::size_t>(first + same)];
+        n = g_.touch_count[static_cast<std::size_t>(first + same)];
+        for (std::uint16_t i = 0; i < n; ++i) {
+          const std::int32_t k = g_.touch_pool[static_cast<std::size_t>(from + i)];
           g_.touch_pool.push_back(k);
-          ++n;
+        }
+      } else if (count > 0) {
+        const Box3 box{g_.forest.position(lo), g_.forest.position(hi)};
+        for (std::uint16_t i = 0; i < count; ++i) {
+          const std::int32_t k = g_.touch_pool[static_cast<std::size_t>(begin + i)];
+          if (oracle_.boundary_touches(k, box)) {
+            g_.touch_pool.push_back(k);
+            ++n;
+          }
         }
       }
       g_.touch_count.push_back(n);
+      if (n > 0)
+        for (std::uint8_t p : child_points) ++cut_delta[p];
+      enqueue(first + c);
+    }
+
+    // New nodes (the midpoints and the centre) and the counts of cut leaves.
+    for (int i = 0; i < 4; ++i)
+      if (cut_delta[i] != 0) nodes_.insert(grid::key3(points[i]), cut_delta[i]);
+    if (!corner) nodes_.insert(grid::key3(points[tet::kCentroid]), cut_delta[tet::kCentroid]);
+    for (int e = 0; e < 6; ++e) {
+      const int p = tet::midpoint(e);
+      const std::int32_t before = nodes_.insert(grid::key3(points[p]), cut_delta[p]);
+      // A midpoint that became a node, or a node that may move, changes the rules of the
+      // leaves whose closure holds it. (The centre is only in the children's closures, and
+      // t's vertices were nodes of a cut leaf already when a child is cut.)
+      if (before >= 0 && !(before == 0 && cut_delta[p] > 0)) continue;
+      around_.clear();
+      g_.forest.leaves_at_midpoint(v[tet::kEdges[e][0]], v[tet::kEdges[e][1]], level, t, around_);
+      for (std::int32_t u : around_) enqueue(u);
     }
   }
 };
@@ -160,22 +328,47 @@ RefinedGrid3 refine3(const geometry::Oracle3& oracle, const grid::Lattice3& latt
     throw std::invalid_argument("refine3: one level per inclusion expected");
   RefinedGrid3 g{grid::TetForest(lattice, range), {}, {}, {}, {}, {}, 0, 0};
   const std::int64_t cubes = range.count(0) * range.count(1) * range.count(2);
-  g.cube_candidate_begin.reserve(static_cast<std::size_t>(cubes) + 1);
-  std::vector<std::int32_t> found;
-  const double h = lattice.h;
-  for (std::int64_t ck = range.lo[2]; ck < range.hi[2]; ++ck)
-    for (std::int64_t cj = range.lo[1]; cj < range.hi[1]; ++cj)
-      for (std::int64_t ci = range.lo[0]; ci < range.hi[0]; ++ci) {
-        g.cube_candidate_begin.push_back(static_cast<std::int32_t>(g.cube_candidates.size()));
-        const Box3 cube{{lattice.origin[0] + static_cast<double>(ci) * h, lattice.origin[1] + static_cast<double>(cj) * h,
-                         lattice.origin[2] + static_cast<double>(ck) * h},
-                        {lattice.origin[0] + static_cast<double>(ci + 1) * h,
-                         lattice.origin[1] + static_cast<double>(cj + 1) * h,
-                         lattice.origin[2] + static_cast<double>(ck + 1) * h}};
-        oracle.candidates(cube, found);
-        g.cube_candidates.insert(g.cube_candidates.end(), found.begin(), found.end());
+  g.cube_candidate_begin.assign(static_cast<std::size_t>(cubes) + 1, 0);
+  // Candidates per coarse cube: one AABB-tree query per block of cubes, then the same
+  // closed-box test per cube (the tree's), so the lists are those of one query per cube.
+  const auto cube_box = [&](std::int64_t ci, std::int64_t cj, std::int64_t ck) {
+    const std::array<std::int64_t, 3> c{ci, cj, ck};
+    Box3 b;
+    for (int d = 0; d < 3; ++d) {
+      b.min[d] = lattice.origin[d] + static_cast<double>(c[d]) * lattice.h;
+      b.max[d] = lattice.origin[d] + static_cast<double>(c[d] + 1) * lattice.h;
+    }
+    return b;
+  };
+  // Blocks of one slab of kCandidateBlock cube layers at a time, then its cubes in order.
+  const std::int64_t blocks_x = (range.count(0) + kCandidateBlock - 1) / kCandidateBlock;
+  const std::int64_t blocks_y = (range.count(1) + kCandidateBlock - 1) / kCandidateBlock;
+  std::vector<std::vector<std::int32_t>> block_candidates(static_cast<std::size_t>(blocks_x * blocks_y));
+  for (std::int64_t bk = range.lo[2]; bk < range.hi[2]; bk += kCandidateBlock) {
+    const std::int64_t ek = std::min(range.hi[2], bk + kCandidateBlock);
+    for (std::int64_t y = 0; y < blocks_y; ++y)
+      for (std::int64_t x = 0; x < blocks_x; ++x) {
+        const std::int64_t bi = range.lo[0] + x * kCandidateBlock, bj = range.lo[1] + y * kCandidateBlock;
+        const std::int64_t ei = std::min(range.hi[0], bi + kCandidateBlock);
+        const std::int64_t ej = std::min(range.hi[1], bj + kCandidateBlock);
+        Box3 block = cube_box(bi, bj, bk);
+        block.max = cube_box(ei - 1, ej - 1, ek - 1).max;
+        oracle.candidates(block, block_candidates[static_cast<std::size_t>(y * blocks_x + x)]);
       }
-  g.cube_candidate_begin.push_back(static_cast<std::int32_t>(g.cube_candidates.size()));
+    for (std::int64_t ck = bk; ck < ek; ++ck)
+      for (std::int64_t cj = range.lo[1]; cj < range.hi[1]; ++cj)
+        for (std::int64_t ci = range.lo[0]; ci < range.hi[0]; ++ci) {
+          g.cube_candidate_begin[static_cast<std::size_t>(g.cube_index(ci, cj, ck))] =
+              static_cast<std::int32_t>(g.cube_candidates.size());
+          const auto& found = block_candidates[static_cast<std::size_t>(
+              (cj - range.lo[1]) / kCandidateBlock * blocks_x + (ci - range.lo[0]) / kCandidateBlock)];
+          if (found.empty()) continue;
+          const Box3 cube = cube_box(ci, cj, ck);
+          for (std::int32_t k : found)
+            if (boxes_overlap(cube, oracle.bounding_box(k))) g.cube_candidates.push_back(k);
+        }
+  }
+  g.cube_candidate_begin[static_cast<std::size_t>(cubes)] = static_cast<std::int32_t>(g.cube_candidates.size());
 
   const std::int32_t roots = g.forest.root_count();
   g.touch_begin.resize(static_cast<std::size_t>(roots));

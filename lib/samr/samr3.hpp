@@ -10,8 +10,12 @@
 //   R4  buffer: a leaf with a vertex on a cut leaf carries no hanging midpoint (refined
 //       otherwise). So cut leaves and every leaf around a node that may move are closed by
 //       nothing, and all leaves around such a node have one level.
-// The rules are applied in synchronous sweeps over all leaves until none fires, so the
-// result depends only on the scene and the lattice, never on a visiting order.
+// The rules are applied in synchronous sweeps until none fires: a sweep marks every leaf a
+// rule fires on, judged on the forest as the previous sweep left it, then refines the
+// marked leaves, so the result depends only on the scene, the lattice and the range, never
+// on a visiting order. A sweep looks only at the leaves whose rules may have changed (the
+// children of the last refinements and the leaves around their new nodes), which gives
+// the same marks as looking at every leaf (lib/samr/README.md, 3D).
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -33,7 +37,7 @@ struct RefinedGrid3 {
   std::vector<std::uint16_t> touch_count;
   std::vector<std::int32_t> touch_pool;
   std::int64_t refinements = 0;
-  int sweeps = 0;
+  int sweeps = 0;  // synchronous sweeps, the last one marking nothing
 
   std::span<const std::int32_t> touched(std::int32_t t) const {
     return {touch_pool.data() + touch_begin[static_cast<std::size_t>(t)], touch_count[static_cast<std::size_t>(t)]};

@@ -162,6 +162,80 @@ TEST(TetForest, FindAndFaceNeighboursMatchBruteForce) {
   EXPECT_GT(checked_same, 100u);
   EXPECT_GT(checked_coarser, 10u);
   EXPECT_GT(outside, 10u);
+  // refine() takes children from a table by cube parity and local index: the same codes,
+  // in the same order, as children_codes() of the parent's code.
+  for (std::int32_t t = 0; t < static_cast<std::int32_t>(f.size()); ++t) {
+    if (f.is_leaf(t)) continue;
+    std::array<TetCode, 12> expect{};
+    const int n = children_codes(f.code(t), expect);
+    ASSERT_EQ(n, f.child_count(t));
+    for (int c = 0; c < n; ++c) EXPECT_EQ(f.code(f.tet(t).first_child + c), expect[c]) << "tet " << t << " child " << c;
+  }
+}
+
+// leaves_at_midpoint() and find_near() against brute force on a randomly refined block:
+// every leaf whose closed tet holds the midpoint, by orientation tests over all leaves.
+TEST(TetForest, LeavesAtMidpointMatchBruteForce) {
+  const Lattice3 l = lattice({3, 2, 2}, 3);
+  TetForest f(l, CellRange<3>{{0, 0, 0}, {3, 2, 2}});
+  std::mt19937 rng(5);
+  std::bernoulli_distribution pick(0.35);
+  for (int level = 0; level < 3; ++level) {
+    const auto n = static_cast<std::int32_t>(f.size());
+    for (std::int32_t t = 0; t < n; ++t)
+      if (f.is_leaf(t) && f.tet(t).level == level && pick(rng)) f.refine(t);
+  }
+  const auto holds = [&](std::int32_t u, const LatticePoint3& p) {
+    const auto v = f.fine_vertices(u);
+    for (int i = 0; i < 4; ++i) {
+      auto w = v;
+      w[i] = p;
+      if (tet::orient(w[0], w[1], w[2], w[3]) < 0) return false;
+    }
+    return true;
+  };
+  std::vector<std::int32_t> got;
+  std::size_t edges = 0, with_finer = 0, with_coarser = 0;
+  for (std::int32_t t = 0; t < static_cast<std::int32_t>(f.size()); ++t) {
+    const int level = f.tet(t).level;
+    if (level >= l.max_level) continue;
+    const auto v = f.fine_vertices(t);
+    for (const auto& e : tet::kEdges) {
+      const LatticePoint3 &a = v[e[0]], &b = v[e[1]];
+      const LatticePoint3 p{(a[0] + b[0]) / 2, (a[1] + b[1]) / 2, (a[2] + b[2]) / 2};
+      got.clear();
+      f.leaves_at_midpoint(a, b, level, t, got);
+      std::sort(got.begin(), got.end());
+      got.erase(std::unique(got.begin(), got.end()), got.end());
+      std::vector<std::int32_t> expect;
+      for (std::int32_t u = 0; u < static_cast<std::int32_t>(f.size()); ++u)
+        if (f.is_leaf(u) && holds(u, p)) expect.push_back(u);
+      EXPECT_EQ(got, expect) << "tet " << t << " edge " << int{e[0]} << "-" << int{e[1]};
+      std::vector<std::int32_t> from_roots;
+      f.leaves_at_midpoint(b, a, level, -1, from_roots);  // either orientation, no start
+      std::sort(from_roots.begin(), from_roots.end());
+      from_roots.erase(std::unique(from_roots.begin(), from_roots.end()), from_roots.end());
+      EXPECT_EQ(from_roots, expect);
+      ++edges;
+      for (std::int32_t u : expect) {
+        with_finer += f.tet(u).level > level ? 1 : 0;
+        with_coarser += f.tet(u).level < level ? 1 : 0;
+      }
+    }
+  }
+  EXPECT_GT(edges, 1000u);
+  EXPECT_GT(with_finer, 100u);
+  EXPECT_GT(with_coarser, 100u);
+  // find_near from any start agrees with find.
+  std::uniform_int_distribution<std::int32_t> any(0, static_cast<std::int32_t>(f.size()) - 1);
+  for (int i = 0; i < 2000; ++i) {
+    const std::int32_t target = any(rng), start = any(rng);
+    EXPECT_EQ(f.find_near(start, f.tet(target).level, f.code(target)), target);
+    // A level below the target's: the leaf or tet on its path, as find() says.
+    const int level = std::max(0, f.tet(target).level - 1);
+    const TetCode parent_code = f.code(f.tet(target).parent >= 0 ? f.tet(target).parent : target);
+    if (f.tet(target).parent >= 0) EXPECT_EQ(f.find_near(start, level, parent_code), f.find(level, parent_code));
+  }
 }
 
 }  // namespace
