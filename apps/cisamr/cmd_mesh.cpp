@@ -10,6 +10,8 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <type_traits>
+#include <vector>
 
 #include "commands.hpp"
 #include "core/error.hpp"
@@ -81,30 +83,70 @@ nlohmann::json algorithm_json(const MeshArgs& args, const pipeline::Stats& stats
           {"max_collapse_deviation", stats.max_collapse_deviation}};
 }
 
-nlohmann::json report_json(const MeshArgs& args, const geometry::SceneDesc& scene, const mesh::Mesh2& m,
-                           const pipeline::Stats& stats, const quality::AspectStats& aspect, double total_seconds) {
+nlohmann::json algorithm_json(const MeshArgs& args, const pipeline::Stats3& stats) {
+  const pipeline::Options defaults;
+  return {{"alpha", args.alpha},
+          {"alpha_diagonal", defaults.alpha_diagonal3},
+          {"extra_levels", args.extra_levels},
+          {"coarse_cubes", stats.coarse_cubes},
+          {"leaves", stats.leaves},
+          {"refinements", stats.refinements},
+          {"finest_level", stats.max_level},
+          {"lattice_nodes", stats.lattice_nodes},
+          {"snapped_nodes", stats.snapped_nodes},
+          {"guard_bound", defaults.bound3},
+          {"guarded_leaves", stats.guarded_leaves},
+          {"guard_combinations", stats.guard_combinations},
+          {"nodes_refused_first_option", stats.refused_nodes},
+          {"collapsed_nodes", stats.collapsed_nodes},
+          {"collapsed_cut_points", stats.collapsed_cut_points},
+          {"max_collapse_deviation", stats.max_collapse_deviation},
+          {"face_swaps", stats.face_swaps},
+          {"cut_tets", stats.cut_tets},
+          {"cut_nodes", stats.cut_nodes},
+          {"closed_tets", stats.closed_tets},
+          {"steiner_points", stats.steiner_points},
+          {"unresolved", stats.unresolved},
+          {"inverted", stats.inverted},
+          {"missing_crossings", stats.missing_crossings}};
+}
+
+// Measure of cell c: area in 2D, volume in 3D.
+double cell_measure(const mesh::Mesh2& m, std::size_t c) {
+  const LocalId* n = m.cell(c);
+  return mesh::signed_area(m.point(n[0]), m.point(n[1]), m.point(n[2]));
+}
+double cell_measure(const mesh::Mesh3& m, std::size_t c) {
+  const LocalId* n = m.cell(c);
+  return mesh::signed_volume(m.point(n[0]), m.point(n[1]), m.point(n[2]), m.point(n[3]));
+}
+
+template <int Dim, class Stats>
+nlohmann::json report_json(const MeshArgs& args, const geometry::SceneDesc& scene, const mesh::SimplexMesh<Dim>& m,
+                           const Stats& stats, const quality::AspectStats& aspect, double total_seconds) {
   nlohmann::json j;
   j["format"] = "cisamr-report/1";
   j["scene"] = args.scene;
   j["output"] = args.output;
-  j["dimension"] = 2;
+  j["dimension"] = Dim;
   j["nodes"] = m.node_count();
   j["elements"] = m.cell_count();
-  // Per-phase element counts and measures.
+  // Per-phase element counts and measures (area in 2D, volume in 3D).
   nlohmann::json phases = nlohmann::json::array();
-  for (const auto& ph : scene.phases) {
-    std::size_t count = 0;
-    double area = 0;
-    for (std::size_t c = 0; c < m.cell_count(); ++c)
-      if (m.cell_phase[c] == ph.id) {
-        ++count;
-        const LocalId* n = m.cell(c);
-        area += mesh::signed_area(m.point(n[0]), m.point(n[1]), m.point(n[2]));
-      }
-    phases.push_back({{"id", ph.id}, {"name", ph.name}, {"void", ph.is_void}, {"elements", count}, {"measure", area}});
+  std::vector<std::size_t> count(scene.phases.size(), 0);
+  std::vector<double> measure(scene.phases.size(), 0.0);
+  for (std::size_t c = 0; c < m.cell_count(); ++c) {
+    const int k = scene.phase_index(m.cell_phase[c]);
+    if (k < 0) continue;
+    ++count[static_cast<std::size_t>(k)];
+    measure[static_cast<std::size_t>(k)] += cell_measure(m, c);
+  }
+  for (std::size_t k = 0; k < scene.phases.size(); ++k) {
+    const auto& ph = scene.phases[k];
+    phases.push_back({{"id", ph.id}, {"name", ph.name}, {"void", ph.is_void}, {"elements", count[k]}, {"measure", measure[k]}});
   }
   j["phases"] = phases;
-  j["aspect_ratio"] = aspect_json(aspect);
+  j["aspect_ratio"] = aspect_json(aspect);  // angles: triangle angles in 2D, dihedral angles in 3D
   j["algorithm"] = algorithm_json(args, stats);
   nlohmann::json times = nlohmann::json::object();
   for (const auto& [name, seconds] : stats.times.phases())
@@ -113,25 +155,29 @@ nlohmann::json report_json(const MeshArgs& args, const geometry::SceneDesc& scen
   j["total_s"] = total_seconds;
   j["ranks"] = 1;
   j["partitions"] = nlohmann::json::array({{{"partition", 0}, {"rank", 0}, {"elements", m.cell_count()}}});
-  j["checksum"] = checksum_text(parallel::mesh_checksum2(m));
+  j["checksum"] = checksum_text(parallel::mesh_checksum(m));
   return j;
 }
 
-// The parallel mesher (lib/parallel). Collective: every rank runs all of it; only rank 0
-// prints and writes the report. Errors are agreed between ranks inside lib/parallel.
-// 3D, one process: the first version of the 3D mesher (lib/pipeline/README3.md). It is
-// conforming but does not yet meet the aspect-ratio bound of 5 everywhere (no face
-// swapping yet): the exit status says so (3) whenever a tetrahedron exceeds it.
-void run_sequential3(const MeshArgs& args, const geometry::SceneDesc& scene, const GlobalFlags& flags, int& exit_code,
-                     std::chrono::steady_clock::time_point start) {
-  progress(flags, "building the 3D geometry oracle");
-  const geometry::Oracle3 oracle(scene);
+// One process, no partitions: the sequential mesher (pipeline::mesh2 / mesh3).
+template <int Dim>
+void run_sequential(const MeshArgs& args, const geometry::SceneDesc& scene, const GlobalFlags& flags, int& exit_code,
+                    std::chrono::steady_clock::time_point start) {
+  progress(flags, "building the geometry oracle");
+  using Oracle = std::conditional_t<Dim == 2, geometry::Oracle2, geometry::Oracle3>;
+  const Oracle oracle(scene);
   pipeline::Options options;
   options.alpha = args.alpha;
   options.extra_levels = args.extra_levels;
-  progress(flags, "meshing (SAMR, r-adaptivity, subdivision)");
-  pipeline::Result3 result = pipeline::mesh3_with_stats(oracle, options);
-  const double bound = args.bound > 0 ? args.bound : 5.0;
+  progress(flags, Dim == 2 ? "meshing (SAMR, r-adaptivity, subdivision)"
+                           : "meshing (SAMR, r-adaptivity with the quality guard, face swapping, subdivision)");
+  auto result = [&] {
+    if constexpr (Dim == 2)
+      return pipeline::mesh2(oracle, options);
+    else
+      return pipeline::mesh3_with_stats(oracle, options);
+  }();
+  const double bound = args.bound > 0 ? args.bound : Dim == 2 ? 3.0 : 5.0;
   quality::AspectStats aspect;
   {
     ScopedPhase timer(&result.stats.times, "quality");
@@ -141,47 +187,47 @@ void run_sequential3(const MeshArgs& args, const geometry::SceneDesc& scene, con
   {
     ScopedPhase timer(&result.stats.times, "write");
     io::write_mesh(args.output, result.mesh, scene.phases);
+    if constexpr (Dim == 2)
+      if (!args.svg.empty()) io::write_mesh_svg(args.svg, result.mesh, scene);
   }
   const double total = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (!args.report.empty()) {
-    nlohmann::json j;
-    j["format"] = "cisamr-report/1";
-    j["scene"] = args.scene;
-    j["output"] = args.output;
-    j["dimension"] = 3;
-    j["nodes"] = result.mesh.node_count();
-    j["elements"] = result.mesh.cell_count();
-    j["aspect_ratio"] = aspect_json(aspect);  // angles are dihedral angles in 3D
-    j["algorithm"] = {{"alpha", args.alpha},
-                      {"extra_levels", args.extra_levels},
-                      {"coarse_cubes", result.stats.coarse_cubes},
-                      {"leaves", result.stats.leaves},
-                      {"snapped_nodes", result.stats.snapped_nodes},
-                      {"cut_tets", result.stats.cut_tets},
-                      {"closed_tets", result.stats.closed_tets},
-                      {"unresolved", result.stats.unresolved},
-                      {"inverted", result.stats.inverted}};
-    nlohmann::json times = nlohmann::json::object();
-    for (const auto& [name, seconds] : result.stats.times.phases()) times[name] = seconds;
-    j["timings_s"] = times;
-    j["total_s"] = total;
     io::AtomicFile file(args.report);
-    file.write(j.dump(2) + "\n");
+    file.write(report_json<Dim>(args, scene, result.mesh, result.stats, aspect, total).dump(2) + "\n");
     file.commit();
   }
   if (!flags.quiet)
-    std::printf("%s: %zu nodes, %zu tetrahedra, max aspect ratio %.3f (bound %.1f, %zu above), %.3f s\n",
-                args.output.c_str(), result.mesh.node_count(), result.mesh.cell_count(), aspect.max, bound,
-                aspect.above_bound, total);
+    std::printf("%s: %zu nodes, %zu %s, max aspect ratio %.3f (bound %.1f, %zu above), %.3f s\n", args.output.c_str(),
+                result.mesh.node_count(), result.mesh.cell_count(), Dim == 2 ? "triangles" : "tetrahedra", aspect.max,
+                bound, aspect.above_bound, total);
   if (flags.verbose)
     for (const auto& [name, seconds] : result.stats.times.phases()) std::printf("  %-10s %8.3f s\n", name.c_str(), seconds);
+  if constexpr (Dim == 2) {
+    if (result.stats.collapsed > 0 && !flags.quiet)
+      std::printf("%lld quads held a feature below the local resolution (a tangency, a thin gap or a wedge "
+                  "sharper than the bound allows); collapsed with nodes at most %.3g from the phases they serve\n",
+                  static_cast<long long>(result.stats.collapsed), result.stats.max_collapse_deviation);
+  } else {
+    if (result.stats.collapsed_nodes + result.stats.collapsed_cut_points > 0 && !flags.quiet)
+      std::printf("%lld nodes could neither stay nor snap without a tetrahedron above the bound (a tangency, a "
+                  "thin gap or a wedge at the domain boundary); collapsed onto the interface, at most %.3g from "
+                  "the phases they serve\n",
+                  static_cast<long long>(result.stats.collapsed_nodes), result.stats.max_collapse_deviation);
+  }
+  if (result.stats.unresolved > 0)
+    std::fprintf(stderr, "cisamr: warning: %lld %s below the finest level's resolution\n",
+                 static_cast<long long>(result.stats.unresolved), Dim == 2 ? "quads" : "leaves");
   exit_code = aspect.above_bound > 0 ? 3 : 0;
 }
 
-void run_parallel(const MeshArgs& args, const GlobalFlags& flags, int& exit_code) {
+// The parallel mesher (lib/parallel). Collective: every rank runs all of it; only rank 0
+// prints and writes the report. Errors are agreed between ranks inside lib/parallel.
+template <int Dim>
+void run_parallel(const MeshArgs& args, const GlobalFlags& flags, int& exit_code, geometry::SceneDesc scene,
+                  std::chrono::steady_clock::time_point start) {
   const Comm& comm = parallel::world();
   const bool root = comm.rank() == 0;
-  const auto start = std::chrono::steady_clock::now();
+  const double read_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   namespace fs = std::filesystem;
   const std::string extension = fs::path(args.output).extension().string();
   // Pieces + .pvtu for a .pvtu name, or for .vtu on several ranks without --gather.
@@ -204,10 +250,11 @@ void run_parallel(const MeshArgs& args, const GlobalFlags& flags, int& exit_code
   options.partitions = args.partitions > 0 ? args.partitions : comm.size();
   options.ghost.level_aware = !args.fixed_ghost;
   options.ghost.max_closure_rounds = args.closure_rounds;
-  parallel::DistributedMesh2 dm = parallel::mesh2_distributed(comm, args.scene, options);
-  const mesh::Mesh2& piece = dm.piece.mesh;
+  parallel::DistributedMesh<Dim> dm = parallel::mesh_distributed<Dim>(comm, std::move(scene), options);
+  dm.times.add("read", read_seconds);
+  const mesh::SimplexMesh<Dim>& piece = dm.piece.mesh;
 
-  const double bound = args.bound > 0 ? args.bound : 3.0;
+  const double bound = args.bound > 0 ? args.bound : Dim == 2 ? 3.0 : 5.0;
   quality::AspectStats aspect;
   std::vector<std::pair<std::int64_t, double>> per_phase;  // elements, measure
   {
@@ -219,25 +266,26 @@ void run_parallel(const MeshArgs& args, const GlobalFlags& flags, int& exit_code
       for (std::size_t c = 0; c < piece.cell_count(); ++c)
         if (piece.cell_phase[c] == ph.id) {
           ++count;
-          const LocalId* n = piece.cell(c);
-          area += mesh::signed_area(piece.point(n[0]), piece.point(n[1]), piece.point(n[2]));
+          area += cell_measure(piece, c);
         }
       per_phase.emplace_back(comm.allreduce_sum(count), comm.allreduce_sum(area));
     }
   }
-  const std::uint64_t checksum = parallel::mesh_checksum2(comm, piece);
+  const std::uint64_t checksum = parallel::mesh_checksum(comm, piece);
   if (show) std::fprintf(stderr, "cisamr: writing the mesh\n");
   {
     ScopedPhase timer(&dm.times, "write");
     // One rank: its piece is already the gathered mesh (nodes in global-id order).
-    mesh::Mesh2 gathered_copy;
-    if ((!pieces || !args.svg.empty()) && comm.size() > 1) gathered_copy = parallel::gather_mesh2(comm, dm.piece);
-    const mesh::Mesh2& gathered = comm.size() > 1 ? gathered_copy : piece;
+    const bool svg = Dim == 2 && !args.svg.empty();
+    mesh::SimplexMesh<Dim> gathered_copy;
+    if ((!pieces || svg) && comm.size() > 1) gathered_copy = parallel::gather_mesh<Dim>(comm, dm.piece);
+    const mesh::SimplexMesh<Dim>& gathered = comm.size() > 1 ? gathered_copy : piece;
     if (pieces)
-      parallel::write_pvtu2(comm, output, piece);
+      parallel::write_pvtu<Dim>(comm, output, piece);
     else
-      parallel::write_gathered2(comm, output, gathered, dm.phases);
-    if (!args.svg.empty())
+      parallel::write_gathered<Dim>(comm, output, gathered, dm.phases);
+    if constexpr (Dim == 2)
+      if (svg)
       parallel::run_collectively(comm, [&] {
         if (!root) return;
         geometry::SceneDesc header;
@@ -249,8 +297,9 @@ void run_parallel(const MeshArgs& args, const GlobalFlags& flags, int& exit_code
   }
   const double total_local = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   dm.times.add("total", total_local);
-  static const std::vector<std::string> kPhases = {"read",      "partition", "ghost",  "oracle", "samr",  "radapt",
-                                                   "subdivide", "assemble",  "merge",  "quality", "write", "total"};
+  static const std::vector<std::string> kPhases = {"read",     "partition", "ghost",    "oracle", "samr",
+                                                   "radapt",   "faceswap",  "subdivide", "assemble", "merge",
+                                                   "quality",  "write",     "total"};
   const std::vector<parallel::PhaseSpread> spread = parallel::spread_over_ranks(comm, dm.times, kPhases);
   const double total = spread.back().max;
 
@@ -269,7 +318,7 @@ void run_parallel(const MeshArgs& args, const GlobalFlags& flags, int& exit_code
         for (int r = 0; r < comm.size(); ++r) names.push_back(parallel::piece_path(output, r));
         j["pieces"] = names;
       }
-      j["dimension"] = 2;
+      j["dimension"] = Dim;
       j["nodes"] = dm.piece.global_nodes;
       j["elements"] = dm.global_cells;
       nlohmann::json phases = nlohmann::json::array();
@@ -279,7 +328,8 @@ void run_parallel(const MeshArgs& args, const GlobalFlags& flags, int& exit_code
       j["phases"] = phases;
       j["aspect_ratio"] = aspect_json(aspect);
       j["algorithm"] = algorithm_json(args, dm.stats);
-      j["algorithm"]["coarse_cells_meshed"] = dm.stats.coarse_cells;
+      if constexpr (Dim == 2) j["algorithm"]["coarse_cells_meshed"] = dm.stats.coarse_cells;
+      if constexpr (Dim == 3) j["stl_files_read_by_rank_0"] = dm.stl_files_read;
       nlohmann::json times = nlohmann::json::object();
       for (const auto& s : spread) times[s.name] = {{"min", s.min}, {"max", s.max}, {"mean", s.mean}};
       j["timings_s"] = times;
@@ -292,8 +342,8 @@ void run_parallel(const MeshArgs& args, const GlobalFlags& flags, int& exit_code
       for (const auto& p : dm.partitions)
         parts.push_back({{"partition", p.id},
                          {"rank", p.rank},
-                         {"lattice_min", p.lattice_min},
-                         {"lattice_max", p.lattice_max},
+                         {"lattice_min", std::vector<std::int64_t>(p.lattice_min.begin(), p.lattice_min.begin() + Dim)},
+                         {"lattice_max", std::vector<std::int64_t>(p.lattice_max.begin(), p.lattice_max.begin() + Dim)},
                          {"load", p.load},
                          {"elements", p.elements},
                          {"nodes", p.nodes},
@@ -309,29 +359,38 @@ void run_parallel(const MeshArgs& args, const GlobalFlags& flags, int& exit_code
       file.commit();
     });
   if (root && !flags.quiet) {
-    std::printf("%s: %lld nodes, %lld triangles, max aspect ratio %.3f (bound %.1f), %.3f s, %d rank(s), %zu partitions\n",
+    std::printf("%s: %lld nodes, %lld %s, max aspect ratio %.3f (bound %.1f), %.3f s, %d rank(s), %zu partitions\n",
                 output.c_str(), static_cast<long long>(dm.piece.global_nodes), static_cast<long long>(dm.global_cells),
-                aspect.max, bound, total, comm.size(), dm.partitions.size());
-    if (dm.stats.collapsed > 0)
-      std::printf("%lld quads held a feature below the local resolution (a tangency, a thin gap or a wedge "
-                  "sharper than the bound allows); collapsed with nodes at most %.3g from the phases they serve\n",
-                  static_cast<long long>(dm.stats.collapsed), dm.stats.max_collapse_deviation);
+                Dim == 2 ? "triangles" : "tetrahedra", aspect.max, bound, total, comm.size(), dm.partitions.size());
+    if constexpr (Dim == 2) {
+      if (dm.stats.collapsed > 0)
+        std::printf("%lld quads held a feature below the local resolution (a tangency, a thin gap or a wedge "
+                    "sharper than the bound allows); collapsed with nodes at most %.3g from the phases they serve\n",
+                    static_cast<long long>(dm.stats.collapsed), dm.stats.max_collapse_deviation);
+    } else {
+      if (dm.stats.collapsed_nodes + dm.stats.collapsed_cut_points > 0)
+        std::printf("%lld nodes could neither stay nor snap without a tetrahedron above the bound; collapsed onto the "
+                    "interface, at most %.3g from the phases they serve\n",
+                    static_cast<long long>(dm.stats.collapsed_nodes), dm.stats.max_collapse_deviation);
+    }
   }
   if (root && flags.verbose) {
     std::printf("  %-10s %9s %9s %9s   (seconds over %d rank(s))\n", "phase", "min", "max", "mean", comm.size());
     for (const auto& s : spread) std::printf("  %-10s %9.3f %9.3f %9.3f\n", s.name.c_str(), s.min, s.max, s.mean);
     std::printf("  partition loads: max %.4g, mean %.4g, imbalance %.3f (%s)\n", max_load, mean_load,
                 mean_load > 0 ? max_load / mean_load : 1.0, dm.partition_method.c_str());
-    for (const auto& p : dm.partitions)
-      std::printf("  part %3d rank %2d cells [%lld,%lld)x[%lld,%lld) load %10.4g elements %9lld ghost %3d "
-                  "inclusions %6lld kernel %.3f s\n",
-                  p.id, p.rank, static_cast<long long>(p.lattice_min[0]), static_cast<long long>(p.lattice_max[0]),
-                  static_cast<long long>(p.lattice_min[1]), static_cast<long long>(p.lattice_max[1]), p.load,
+    for (const auto& p : dm.partitions) {
+      std::printf("  part %3d rank %2d cells ", p.id, p.rank);
+      for (int d = 0; d < Dim; ++d)
+        std::printf("%s[%lld,%lld)", d ? "x" : "", static_cast<long long>(p.lattice_min[d]),
+                    static_cast<long long>(p.lattice_max[d]));
+      std::printf(" load %10.4g elements %9lld ghost %3d inclusions %6lld kernel %.3f s\n", p.load,
                   static_cast<long long>(p.elements), p.ghost, static_cast<long long>(p.inclusions), p.kernel_seconds);
+    }
   }
   if (root && dm.stats.unresolved > 0)
-    std::fprintf(stderr, "cisamr: warning: %lld quads below the finest level's resolution\n",
-                 static_cast<long long>(dm.stats.unresolved));
+    std::fprintf(stderr, "cisamr: warning: %lld %s below the finest level's resolution\n",
+                 static_cast<long long>(dm.stats.unresolved), Dim == 2 ? "quads" : "leaves");
   exit_code = aspect.above_bound > 0 ? 3 : 0;
 }
 
@@ -367,56 +426,26 @@ void add_mesh_command(CLI::App& app, GlobalFlags& flags, int& exit_code) {
       ->group("");
   cmd->callback([args, &flags, &exit_code] {
     if (parallel::world().size() > 1 || args->partitions > 0) {
-      run_parallel(*args, flags, exit_code);
+      // Every rank reads the scene's descriptors (STL triangles later, where needed).
+      const auto start = std::chrono::steady_clock::now();
+      geometry::SceneDesc scene;
+      parallel::run_collectively(parallel::world(), [&] {
+        scene = io::read_scene(args->scene, io::ReadSceneOptions{.load_stl = false});
+      });
+      if (scene.dimension == 3)
+        run_parallel<3>(*args, flags, exit_code, std::move(scene), start);
+      else
+        run_parallel<2>(*args, flags, exit_code, std::move(scene), start);
       return;
     }
     const auto start = std::chrono::steady_clock::now();
     io::mesh_format_of(args->output);  // fail on a bad extension before any work
     progress(flags, "reading the scene");
     const geometry::SceneDesc scene = io::read_scene(args->scene);
-    if (scene.dimension == 3) {
-      run_sequential3(*args, scene, flags, exit_code, start);
-      return;
-    }
-    progress(flags, "building the geometry oracle");
-    const geometry::Oracle2 oracle(scene);
-    pipeline::Options options;
-    options.alpha = args->alpha;
-    options.extra_levels = args->extra_levels;
-    progress(flags, "meshing (SAMR, r-adaptivity, subdivision)");
-    pipeline::Result2 result = pipeline::mesh2(oracle, options);
-    const double bound = args->bound > 0 ? args->bound : 3.0;
-    quality::AspectStats aspect;
-    io::MeshWriteOptions write_options;
-    {
-      ScopedPhase timer(&result.stats.times, "quality");
-      aspect = quality::aspect_statistics(result.mesh, bound);
-    }
-    progress(flags, "writing the mesh");
-    {
-      ScopedPhase timer(&result.stats.times, "write");
-      io::write_mesh(args->output, result.mesh, scene.phases, write_options);
-      if (!args->svg.empty()) io::write_mesh_svg(args->svg, result.mesh, scene);
-    }
-    const double total = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    if (!args->report.empty()) {
-      io::AtomicFile file(args->report);
-      file.write(report_json(*args, scene, result.mesh, result.stats, aspect, total).dump(2) + "\n");
-      file.commit();
-    }
-    if (!flags.quiet)
-      std::printf("%s: %zu nodes, %zu triangles, max aspect ratio %.3f (bound %.1f), %.3f s\n", args->output.c_str(),
-                  result.mesh.node_count(), result.mesh.cell_count(), aspect.max, bound, total);
-    if (flags.verbose)
-      for (const auto& [name, seconds] : result.stats.times.phases()) std::printf("  %-10s %8.3f s\n", name.c_str(), seconds);
-    if (result.stats.collapsed > 0 && !flags.quiet)
-      std::printf("%lld quads held a feature below the local resolution (a tangency, a thin gap or a wedge "
-                  "sharper than the bound allows); collapsed with nodes at most %.3g from the phases they serve\n",
-                  static_cast<long long>(result.stats.collapsed), result.stats.max_collapse_deviation);
-    if (result.stats.unresolved > 0)
-      std::fprintf(stderr, "cisamr: warning: %lld quads below the finest level's resolution\n",
-                   static_cast<long long>(result.stats.unresolved));
-    exit_code = aspect.above_bound > 0 ? 3 : 0;
+    if (scene.dimension == 3)
+      run_sequential<3>(*args, scene, flags, exit_code, start);
+    else
+      run_sequential<2>(*args, scene, flags, exit_code, start);
   });
 }
 

@@ -15,6 +15,7 @@ void add_mesh_command(CLI::App& app, GlobalFlags& flags, int& exit_code);
 void add_certify_command(CLI::App& app, GlobalFlags& flags, int& exit_code);
 void add_pack_command(CLI::App& app, GlobalFlags& flags, int& exit_code);
 void add_partition_command(CLI::App& app, GlobalFlags& flags, int& exit_code);
+void add_compare_command(CLI::App& app, GlobalFlags& flags, int& exit_code);  // 3D, vs TetGen
 
 // Progress lines go to stderr only when it is a terminal and --quiet is not given.
 bool show_progress(const GlobalFlags& flags);

@@ -55,6 +55,7 @@ int main(int argc, char** argv) {
   app::add_certify_command(app, flags, exit_code);
   app::add_pack_command(app, flags, exit_code);
   app::add_partition_command(app, flags, exit_code);
+  app::add_compare_command(app, flags, exit_code);
   for (CLI::App* sub : app.get_subcommands({})) {
     sub->add_flag("-q,--quiet", flags.quiet, "No progress output");
     sub->add_flag("-v,--verbose", flags.verbose, "Print phase timings");

@@ -120,6 +120,8 @@ class SceneReader {
  public:
   SceneReader(std::string file, fs::path base_directory)
       : file_(std::move(file)), base_directory_(std::move(base_directory)) {}
+  SceneReader(std::string file, fs::path base_directory, bool load_stl)
+      : file_(std::move(file)), base_directory_(std::move(base_directory)), load_stl_(load_stl) {}
 
   [[noreturn]] void fail(const std::string& field, const std::string& problem) const {
     throw InputError(file_, field, problem);
@@ -432,7 +434,7 @@ class SceneReader {
       std::ifstream probe(s.file, std::ios::binary);
       if (!probe)
         fail(file_field, "cannot read '" + s.file + "': " + std::strerror(errno));
-      s.triangles = read_stl(s.file);  // its own errors name the STL file and line
+      if (load_stl_) s.triangles = read_stl(s.file);  // its own errors name the STL file and line
       if (const json* v = member(object, "scale")) s.scale = positive(*v, join(field, "scale"));
       if (const json* r = member(object, "rotation")) s.rotation = rotation(*r, join(field, "rotation"));
       if (const json* t = member(object, "translate")) s.translate = vec<3>(*t, join(field, "translate"));
@@ -454,6 +456,7 @@ class SceneReader {
  private:
   std::string file_;
   fs::path base_directory_;
+  bool load_stl_ = true;  // false: STL triangles are read later (load_stl_surfaces)
 };
 
 const std::vector<std::string_view> kShapes2 = {"circle", "ellipse", "polygon", "nurbs"};
@@ -802,6 +805,10 @@ class PrettyPrinter {
 }  // namespace
 
 SceneDesc parse_scene(const std::string& json_text, const std::string& source) {
+  return parse_scene(json_text, source, ReadSceneOptions{});
+}
+
+SceneDesc parse_scene(const std::string& json_text, const std::string& source, const ReadSceneOptions& options) {
   DuplicateKeyFinder duplicates;
   json root;
   try {
@@ -820,10 +827,18 @@ SceneDesc parse_scene(const std::string& json_text, const std::string& source) {
   }
   if (!duplicates.duplicate_field.empty())
     throw InputError(source, duplicates.duplicate_field, "duplicate key");
-  return SceneReader(source, directory_of(source)).scene(root);
+  return SceneReader(source, directory_of(source), options.load_stl).scene(root);
 }
 
-SceneDesc read_scene(const std::string& path) {
+SceneDesc read_scene(const std::string& path) { return read_scene(path, ReadSceneOptions{}); }
+
+void load_stl_surfaces(SceneDesc& scene, std::span<const std::int32_t> inclusions) {
+  for (std::int32_t k : inclusions)
+    if (auto* s = std::get_if<StlSurface>(&scene.inclusions.at(static_cast<std::size_t>(k)).shape))
+      if (s->triangles.empty()) s->triangles = read_stl(s->file);
+}
+
+SceneDesc read_scene(const std::string& path, const ReadSceneOptions& options) {
   std::ifstream in(path, std::ios::binary);
   std::error_code ec;
   if (!in || fs::is_directory(path, ec))
@@ -832,7 +847,7 @@ SceneDesc read_scene(const std::string& path) {
   std::ostringstream buffer;
   buffer << in.rdbuf();
   if (in.bad()) throw InputError(path, "", "cannot read: I/O error");
-  return parse_scene(buffer.str(), path);
+  return parse_scene(buffer.str(), path, options);
 }
 
 std::string scene_to_json(const SceneDesc& scene, const std::string& destination) {

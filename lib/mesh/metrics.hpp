@@ -57,6 +57,30 @@ inline double aspect_ratio(const Vec3& a, const Vec3& b, const Vec3& c, const Ve
   return l_max / (2.0 * std::sqrt(6.0) * r_in);
 }
 
+// Is tetrahedron (a, b, c, d) positively oriented with aspect_ratio(a, b, c, d) ≤ bound?
+// With AR = l_max·F / (√6·6V) (F the sum of face areas), 5 square roots instead of 10. The
+// test is stricter than the bound by a relative 1e-9, so that a tet it accepts passes any
+// later evaluation of aspect_ratio() despite round-off.
+inline bool positive_within(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d, double bound) {
+  const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+  const double v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+  const double w[3] = {d[0] - a[0], d[1] - a[1], d[2] - a[2]};
+  const double six_volume = u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0]) +
+                            u[2] * (v[0] * w[1] - v[1] * w[0]);
+  if (!(six_volume > 0)) return false;
+  const auto norm_cross = [](const double* x, const double* y) {
+    const double p = x[1] * y[2] - x[2] * y[1], q = x[2] * y[0] - x[0] * y[2], r = x[0] * y[1] - x[1] * y[0];
+    return std::sqrt(p * p + q * q + r * r);
+  };
+  const double bc[3] = {c[0] - b[0], c[1] - b[1], c[2] - b[2]};
+  const double bd[3] = {d[0] - b[0], d[1] - b[1], d[2] - b[2]};
+  const double cd[3] = {d[0] - c[0], d[1] - c[1], d[2] - c[2]};
+  const double faces = 0.5 * (norm_cross(u, v) + norm_cross(u, w) + norm_cross(v, w) + norm_cross(bc, bd));
+  const auto sq = [](const double* x) { return x[0] * x[0] + x[1] * x[1] + x[2] * x[2]; };
+  const double l2 = std::max({sq(u), sq(v), sq(w), sq(bc), sq(bd), sq(cd)});
+  return std::sqrt(l2) * faces <= bound * (1 - 1e-9) * std::sqrt(6.0) * six_volume;
+}
+
 // Aspect ratio of cell c of a mesh.
 template <class MeshT>
 inline double cell_aspect_ratio(const MeshT& m, std::size_t c) {

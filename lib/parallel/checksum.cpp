@@ -15,20 +15,38 @@ std::uint64_t bits(double v) {
   return b;
 }
 
-CanonicalTriangle canonical(const mesh::Mesh2& m, std::size_t c) {
-  std::array<std::array<std::uint64_t, 2>, 3> v;
-  for (int k = 0; k < 3; ++k) {
-    const auto n = static_cast<std::size_t>(m.cell_nodes[3 * c + static_cast<std::size_t>(k)]);
-    v[static_cast<std::size_t>(k)] = {bits(m.coords[2 * n]), bits(m.coords[2 * n + 1])};
+// Even permutations of the cell's vertices: the rotations of a triangle; for a tet, each
+// vertex first followed by a rotation of the other three in their oriented order.
+template <int Dim>
+constexpr auto kEvenPermutations = [] {
+  if constexpr (Dim == 2) {
+    return std::array<std::array<int, 3>, 3>{{{0, 1, 2}, {1, 2, 0}, {2, 0, 1}}};
+  } else {
+    return std::array<std::array<int, 4>, 12>{{{0, 1, 2, 3}, {0, 2, 3, 1}, {0, 3, 1, 2}, {1, 0, 3, 2},
+                                               {1, 3, 2, 0}, {1, 2, 0, 3}, {2, 0, 1, 3}, {2, 1, 3, 0},
+                                               {2, 3, 0, 1}, {3, 0, 2, 1}, {3, 2, 1, 0}, {3, 1, 0, 2}}};
   }
-  const auto first = static_cast<std::size_t>(std::min_element(v.begin(), v.end()) - v.begin());
-  CanonicalTriangle t;
-  for (std::size_t k = 0; k < 3; ++k) {
-    t.xy[2 * k] = v[(first + k) % 3][0];
-    t.xy[2 * k + 1] = v[(first + k) % 3][1];
+}();
+
+template <int Dim>
+CanonicalSimplex<Dim> canonical(const mesh::SimplexMesh<Dim>& m, std::size_t c) {
+  constexpr int kCorners = Dim + 1;
+  std::array<std::array<std::uint64_t, Dim>, kCorners> v;
+  for (int k = 0; k < kCorners; ++k) {
+    const auto n = static_cast<std::size_t>(m.cell_nodes[kCorners * c + static_cast<std::size_t>(k)]);
+    for (int d = 0; d < Dim; ++d) v[static_cast<std::size_t>(k)][static_cast<std::size_t>(d)] = bits(m.coords[Dim * n + d]);
   }
-  t.phase = m.cell_phase[c];
-  return t;
+  CanonicalSimplex<Dim> best;
+  bool first = true;
+  for (const auto& perm : kEvenPermutations<Dim>) {
+    CanonicalSimplex<Dim> t;
+    for (int k = 0; k < kCorners; ++k)
+      for (int d = 0; d < Dim; ++d) t.xyz[static_cast<std::size_t>(Dim * k + d)] = v[static_cast<std::size_t>(perm[k])][static_cast<std::size_t>(d)];
+    if (first || t.xyz < best.xyz) best = t;
+    first = false;
+  }
+  best.phase = m.cell_phase[c];
+  return best;
 }
 
 std::uint64_t mix(std::uint64_t x) {
@@ -40,26 +58,36 @@ std::uint64_t mix(std::uint64_t x) {
 
 }  // namespace
 
-std::vector<CanonicalTriangle> canonical_triangles(const mesh::Mesh2& m) {
-  std::vector<CanonicalTriangle> out(m.cell_count());
+template <int Dim>
+std::vector<CanonicalSimplex<Dim>> canonical_simplices(const mesh::SimplexMesh<Dim>& m) {
+  std::vector<CanonicalSimplex<Dim>> out(m.cell_count());
   for (std::size_t c = 0; c < out.size(); ++c) out[c] = canonical(m, c);
   std::sort(out.begin(), out.end());
   return out;
 }
 
-std::uint64_t mesh_checksum2(const mesh::Mesh2& m) {
+template <int Dim>
+std::uint64_t mesh_checksum(const mesh::SimplexMesh<Dim>& m) {
   std::uint64_t sum = 0;
   for (std::size_t c = 0; c < m.cell_count(); ++c) {
-    const CanonicalTriangle t = canonical(m, c);
+    const CanonicalSimplex<Dim> t = canonical(m, c);
     std::uint64_t h = mix(static_cast<std::uint64_t>(t.phase));
-    for (std::uint64_t x : t.xy) h = mix(h ^ x);
+    for (std::uint64_t x : t.xyz) h = mix(h ^ x);
     sum += h;
   }
   return sum;
 }
 
-std::uint64_t mesh_checksum2(const Comm& comm, const mesh::Mesh2& piece) {
-  return allreduce_sum_u64(comm, mesh_checksum2(piece));
+template <int Dim>
+std::uint64_t mesh_checksum(const Comm& comm, const mesh::SimplexMesh<Dim>& piece) {
+  return allreduce_sum_u64(comm, mesh_checksum(piece));
 }
+
+template std::vector<CanonicalSimplex<2>> canonical_simplices(const mesh::SimplexMesh<2>&);
+template std::vector<CanonicalSimplex<3>> canonical_simplices(const mesh::SimplexMesh<3>&);
+template std::uint64_t mesh_checksum(const mesh::SimplexMesh<2>&);
+template std::uint64_t mesh_checksum(const mesh::SimplexMesh<3>&);
+template std::uint64_t mesh_checksum(const Comm&, const mesh::SimplexMesh<2>&);
+template std::uint64_t mesh_checksum(const Comm&, const mesh::SimplexMesh<3>&);
 
 }  // namespace cisamr::parallel

@@ -11,20 +11,34 @@
 
 namespace cisamr::parallel {
 
-struct CanonicalTriangle {
-  std::array<std::uint64_t, 6> xy{};  // coordinate bits, rotated so the smallest vertex is first
+template <int Dim>
+struct CanonicalSimplex {
+  // Coordinate bits of the Dim+1 vertices, in the even permutation (orientation kept) that
+  // is lexicographically smallest: a triangle starts at its smallest vertex.
+  std::array<std::uint64_t, Dim*(Dim + 1)> xyz{};
   std::int32_t phase = 0;
-  auto operator<=>(const CanonicalTriangle&) const = default;
+  auto operator<=>(const CanonicalSimplex&) const = default;
 };
+using CanonicalTriangle = CanonicalSimplex<2>;
+using CanonicalTet = CanonicalSimplex<3>;
 
-// The triangles of `m`, each rotated (orientation kept) to start at its smallest vertex
-// (by coordinate bits), sorted. Two meshes are the same set of elements iff these agree.
-std::vector<CanonicalTriangle> canonical_triangles(const mesh::Mesh2& m);
+// The cells of `m` in canonical form, sorted. Two meshes are the same set of elements iff
+// these agree.
+template <int Dim>
+std::vector<CanonicalSimplex<Dim>> canonical_simplices(const mesh::SimplexMesh<Dim>& m);
+inline std::vector<CanonicalTriangle> canonical_triangles(const mesh::Mesh2& m) { return canonical_simplices(m); }
+inline std::vector<CanonicalTet> canonical_tets(const mesh::Mesh3& m) { return canonical_simplices(m); }
 
-// Σ over triangles of a 64-bit hash of the canonical triangle, modulo 2^64.
-std::uint64_t mesh_checksum2(const mesh::Mesh2& m);
-
+// Σ over cells of a 64-bit hash of the canonical cell, modulo 2^64.
+template <int Dim>
+std::uint64_t mesh_checksum(const mesh::SimplexMesh<Dim>& m);
 // Collective: the checksum of the union of every rank's cells.
-std::uint64_t mesh_checksum2(const Comm& comm, const mesh::Mesh2& piece);
+template <int Dim>
+std::uint64_t mesh_checksum(const Comm& comm, const mesh::SimplexMesh<Dim>& piece);
+
+inline std::uint64_t mesh_checksum2(const mesh::Mesh2& m) { return mesh_checksum(m); }
+inline std::uint64_t mesh_checksum2(const Comm& comm, const mesh::Mesh2& piece) { return mesh_checksum(comm, piece); }
+inline std::uint64_t mesh_checksum3(const mesh::Mesh3& m) { return mesh_checksum(m); }
+inline std::uint64_t mesh_checksum3(const Comm& comm, const mesh::Mesh3& piece) { return mesh_checksum(comm, piece); }
 
 }  // namespace cisamr::parallel

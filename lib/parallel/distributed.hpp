@@ -1,18 +1,21 @@
 #pragma once
-// Parallel CISAMR in 2D (paper Algorithm 2, DESIGN.md §8). Collective over a core::Comm:
-// the same code runs on one process (SerialComm) or under mpiexec (MpiComm).
+// Parallel CISAMR in 2D and 3D (paper Algorithm 2, DESIGN.md §8). Collective over a
+// core::Comm: the same code runs on one process (SerialComm) or under mpiexec (MpiComm).
 //
-//   read      every rank reads the scene file itself (no broadcast)
+//   read      every rank reads the scene file itself (no broadcast); in 3D without the STL
+//             triangles, which are read later, each only by the ranks that need it
 //   partition rank 0 runs partition::partition_domain, the boxes are broadcast; partition
 //             i goes to the rank whose block of consecutive ids holds it
 //   ghost     per own partition, the ghost region (ghost.hpp): which inclusions, which cells
-//   oracle    per own partition, an Oracle2 from exactly its ghost region's inclusions
-//             (original order kept); the rest of the scene's descriptors is dropped first
-//   kernel    pipeline::run2 unchanged on each own partition (samr, radapt, subdivide, assemble)
-//   merge     nodes merged by lattice key, owners, global ids (merge.hpp)
+//   oracle    per own partition, an Oracle2/Oracle3 from exactly its ghost region's
+//             inclusions (original order kept); the rest of the scene's descriptors is
+//             dropped first
+//   kernel    pipeline::run2/run3 unchanged on each own partition
+//   merge     nodes merged by lattice identity, owners, global ids (merge.hpp)
 // Every stage ends with an agreement on errors (collective.hpp).
 #include <cstdint>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "core/comm.hpp"
@@ -22,6 +25,7 @@
 #include "parallel/merge.hpp"
 #include "partition/partition.hpp"
 #include "pipeline/pipeline.hpp"
+#include "pipeline/pipeline3.hpp"
 
 namespace cisamr::parallel {
 
@@ -34,37 +38,61 @@ struct MeshOptions {
 
 struct PartitionSummary {
   int id = 0, rank = 0;
-  std::array<std::int64_t, 2> lattice_min{}, lattice_max{};  // coarse cells [min, max)
+  std::array<std::int64_t, 3> lattice_min{}, lattice_max{};  // coarse cells [min, max) (Dim used)
   double load = 0;                // paper Eq. 2
   int ghost = 0;                  // ghost width (coarse cells) it was meshed with
   std::int64_t ghost_cells = 0;   // coarse cells meshed beyond its box
   std::int64_t inclusions = 0;    // inclusions its ghost region loads
   std::int64_t elements = 0, nodes = 0;
-  double kernel_seconds = 0;      // pipeline::run2
+  double kernel_seconds = 0;      // pipeline::run2 / run3
 };
 
 // Block distribution: rank r meshes partitions [first, last).
 std::array<int, 2> partitions_of_rank(int partitions, int ranks, int rank);
 int rank_of_partition(int partition, int partitions, int ranks);
 
-struct DistributedMesh2 {
-  NumberedPiece2 piece;             // this rank's cells and nodes, global ids
+template <int Dim>
+using KernelStats = std::conditional_t<Dim == 2, pipeline::Stats, pipeline::Stats3>;
+
+template <int Dim>
+struct DistributedMesh {
+  NumberedPiece<Dim> piece;         // this rank's cells and nodes, global ids
   std::vector<geometry::Phase> phases;
-  Box2 domain{};
+  Box<Dim> domain{};
   std::int64_t scene_inclusions = 0;
   std::int64_t global_cells = 0;
   std::string partition_method;
-  std::vector<PartitionSummary> partitions;  // every partition, by id, on every rank
+  std::vector<PartitionSummary> partitions;     // every partition, by id, on every rank
   std::vector<std::int32_t> loaded_inclusions;  // what this rank's partitions load: scene indices, ascending
-  pipeline::Stats stats;            // counters summed over all partitions of all ranks
+  std::int64_t stl_files_read = 0;  // STL surfaces this rank read (3D; lazy loading)
+  KernelStats<Dim> stats;           // counters summed over all partitions of all ranks
   PhaseTimes times;                 // this rank's phase times
 };
+using DistributedMesh2 = DistributedMesh<2>;
+using DistributedMesh3 = DistributedMesh<3>;
 
 // Collective. Reads the scene on every rank, then as above. Errors (bad scene, N < ranks,
-// a mesh the rules cannot build) are thrown on every rank alike (collective.hpp).
-DistributedMesh2 mesh2_distributed(const Comm& comm, const std::string& scene_path, const MeshOptions& options);
+// a mesh the rules cannot build, a scene of the other dimension) are thrown on every rank
+// alike (collective.hpp).
+template <int Dim>
+DistributedMesh<Dim> mesh_distributed(const Comm& comm, const std::string& scene_path, const MeshOptions& options);
 
-// Collective. The same from a scene every rank already holds (tests, library use).
-DistributedMesh2 mesh2_distributed(const Comm& comm, geometry::SceneDesc scene, const MeshOptions& options);
+// Collective. The same from a scene every rank already holds (tests, library use). In 3D,
+// STL surfaces without triangles are read from their files by the ranks that need them.
+template <int Dim>
+DistributedMesh<Dim> mesh_distributed(const Comm& comm, geometry::SceneDesc scene, const MeshOptions& options);
+
+inline DistributedMesh2 mesh2_distributed(const Comm& comm, const std::string& scene_path, const MeshOptions& options) {
+  return mesh_distributed<2>(comm, scene_path, options);
+}
+inline DistributedMesh2 mesh2_distributed(const Comm& comm, geometry::SceneDesc scene, const MeshOptions& options) {
+  return mesh_distributed<2>(comm, std::move(scene), options);
+}
+inline DistributedMesh3 mesh3_distributed(const Comm& comm, const std::string& scene_path, const MeshOptions& options) {
+  return mesh_distributed<3>(comm, scene_path, options);
+}
+inline DistributedMesh3 mesh3_distributed(const Comm& comm, geometry::SceneDesc scene, const MeshOptions& options) {
+  return mesh_distributed<3>(comm, std::move(scene), options);
+}
 
 }  // namespace cisamr::parallel

@@ -5,14 +5,13 @@
 #include <stdexcept>
 #include <string>
 
-#include "grid/key_map.hpp"
+#include "grid/tet_lattice.hpp"
 #include "parallel/collective.hpp"
 #include "parallel/exchange.hpp"
 
 namespace cisamr::parallel {
-namespace {
-
-constexpr std::uint64_t kInterior = pipeline::Result2::kInteriorNode;
+// Not an anonymous namespace: the exported templates below capture these types.
+namespace merge_detail {
 
 std::uint64_t mix(std::uint64_t x) {  // splitmix64 finaliser
   x += 0x9e3779b97f4a7c15ull;
@@ -20,81 +19,176 @@ std::uint64_t mix(std::uint64_t x) {  // splitmix64 finaliser
   x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
   return x ^ (x >> 31);
 }
-std::size_t home_rank(std::uint64_t key, int size) { return static_cast<std::size_t>(mix(key) % static_cast<std::uint64_t>(size)); }
+std::uint64_t hash_of(std::uint64_t key) { return mix(key); }
+std::uint64_t hash_of(const std::array<std::uint64_t, 2>& key) { return mix(mix(key[0]) ^ key[1]); }
 
 bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof(double)) == 0; }
 
-struct Claim {  // one rank's claim on a face key, as the rendezvous rank sees it
-  std::uint64_t key;
+// What differs between 2D and 3D: where a node's identity comes from, which identities are
+// never shared, which lie on a partition face, and how an error names a node.
+template <int Dim>
+struct Identities;
+
+template <>
+struct Identities<2> {
+  using Key = std::uint64_t;
+  static Key of(const pipeline::Result2& r, std::size_t n) { return r.node_key[n]; }
+  static bool unshared(Key k) { return k == pipeline::Result2::kInteriorNode; }
+  static std::array<std::int64_t, 2> point(std::uint64_t k) { return {grid::key2_x(k), grid::key2_y(k)}; }
+  static std::array<std::uint64_t, 1> lattice_keys(Key k) { return {k}; }
+  static std::string name(Key k) {
+    return "lattice node (" + std::to_string(grid::key2_x(k)) + ", " + std::to_string(grid::key2_y(k)) + ")";
+  }
+};
+
+template <>
+struct Identities<3> {
+  using Key = std::array<std::uint64_t, 2>;
+  static Key of(const pipeline::Result3& r, std::size_t n) { return r.node_identity[n]; }
+  static bool unshared(const Key& k) { return k[0] == pipeline::Result3::kNotLatticeNode; }
+  static std::array<std::int64_t, 3> point(std::uint64_t k) { return grid::key3_point(k); }
+  // A cut node lies on a face iff its whole edge does: both ends must be on one.
+  static Key lattice_keys(const Key& k) { return k; }
+  static std::string name(const Key& k) {
+    const auto text = [](std::uint64_t key) {
+      const auto p = grid::key3_point(key);
+      return "(" + std::to_string(p[0]) + ", " + std::to_string(p[1]) + ", " + std::to_string(p[2]) + ")";
+    };
+    return k[0] == k[1] ? "lattice node " + text(k[0]) : "cut node on edge " + text(k[0]) + "-" + text(k[1]);
+  }
+};
+
+// Open addressing from an identity to a local id.
+template <class Key>
+class IdentityMap {
+ public:
+  explicit IdentityMap(std::size_t expected) {
+    std::size_t c = 16;
+    while (c < 2 * expected) c <<= 1;
+    keys_.resize(c);
+    values_.assign(c, -1);
+  }
+  std::int32_t find(const Key& key) const {
+    for (std::size_t i = hash_of(key) & (values_.size() - 1);; i = (i + 1) & (values_.size() - 1)) {
+      if (values_[i] < 0) return -1;
+      if (keys_[i] == key) return values_[i];
+    }
+  }
+  std::int32_t insert(const Key& key, std::int32_t value, bool& inserted) {
+    if ((size_ + 1) * 2 > values_.size()) grow();
+    for (std::size_t i = hash_of(key) & (values_.size() - 1);; i = (i + 1) & (values_.size() - 1)) {
+      if (values_[i] < 0) {
+        keys_[i] = key;
+        values_[i] = value;
+        ++size_;
+        inserted = true;
+        return value;
+      }
+      if (keys_[i] == key) {
+        inserted = false;
+        return values_[i];
+      }
+    }
+  }
+
+ private:
+  void grow() {
+    IdentityMap bigger(values_.size());
+    bool ignored = false;
+    for (std::size_t i = 0; i < values_.size(); ++i)
+      if (values_[i] >= 0) bigger.insert(keys_[i], values_[i], ignored);
+    *this = std::move(bigger);
+  }
+  std::vector<Key> keys_;
+  std::vector<std::int32_t> values_;
+  std::size_t size_ = 0;
+};
+
+template <class Key>
+struct Claim {  // one rank's claim on a face identity, as the rendezvous rank sees it
+  Key key;
   std::int32_t partition;  // lowest partition of that rank emitting the key
   std::int32_t rank;
 };
 
-}  // namespace
+}  // namespace merge_detail
+using namespace merge_detail;
 
-NumberedPiece2 merge_and_number2(const Comm& comm, std::vector<PartitionOutput2>& parts,
-                                 const grid::Lattice2& lattice) {
+template <int Dim>
+NumberedPiece<Dim> merge_and_number(const Comm& comm, std::vector<PartitionOutput<Dim>>& parts,
+                                    const grid::Lattice<Dim>& lattice) {
+  using Id = Identities<Dim>;
+  using Key = typename Id::Key;
+  constexpr int kCorners = Dim + 1;
   const int size = comm.size();
-  NumberedPiece2 piece;
+  const auto home_rank = [size](const Key& key) {
+    return static_cast<std::size_t>(hash_of(key) % static_cast<std::uint64_t>(size));
+  };
+  NumberedPiece<Dim> piece;
   std::vector<std::int32_t> first_part;  // per merged node: lowest local partition emitting it
   std::vector<char> on_face;             // per merged node: on a partition face inside the domain
   std::vector<double> coords;
-  std::vector<std::uint64_t> keys;
-  mesh::Mesh2 cells;
-  grid::KeyMap by_key(1024);
+  std::vector<Key> keys;
+  mesh::SimplexMesh<Dim> cells;
+  IdentityMap<Key> by_key(1024);
 
-  // 1. Merge this rank's partitions by key (interior points are never shared).
+  // 1. Merge this rank's partitions by identity (unshared points get ids without lookup).
   run_collectively(comm, [&] {
     const std::int64_t unit = lattice.units(0);
-    const std::int64_t fx = lattice.coarse_cells[0] * unit, fy = lattice.coarse_cells[1] * unit;
-    for (PartitionOutput2& part : parts) {
-      const mesh::Mesh2& m = part.result.mesh;
-      const std::int64_t x0 = part.box.lo[0] * unit, x1 = part.box.hi[0] * unit;
-      const std::int64_t y0 = part.box.lo[1] * unit, y1 = part.box.hi[1] * unit;
+    for (PartitionOutput<Dim>& part : parts) {
+      const auto& m = part.result.mesh;
+      // A lattice point on a face of this box that is not the domain's boundary.
+      const auto on_inner_face = [&](std::uint64_t key) {
+        const auto p = Id::point(key);
+        for (int d = 0; d < Dim; ++d) {
+          const std::int64_t lo = part.box.lo[d] * unit, hi = part.box.hi[d] * unit;
+          if ((p[d] == lo && part.box.lo[d] != 0) || (p[d] == hi && part.box.hi[d] != lattice.coarse_cells[d]))
+            return true;
+        }
+        return false;
+      };
       std::vector<std::int32_t> local(m.node_count());
       for (std::size_t n = 0; n < m.node_count(); ++n) {
-        const std::uint64_t key = part.result.node_key[n];
-        const double x = m.coords[2 * n], y = m.coords[2 * n + 1];
+        const Key key = Id::of(part.result, n);
+        const bool unshared = Id::unshared(key);
         const auto next = static_cast<std::int32_t>(keys.size());
         bool inserted = true;
-        const std::int32_t id = key == kInterior ? next : by_key.insert(key, next, inserted);
+        const std::int32_t id = unshared ? next : by_key.insert(key, next, inserted);
         local[n] = id;
         if (!inserted) {
-          if (!same_bits(coords[2 * static_cast<std::size_t>(id)], x) ||
-              !same_bits(coords[2 * static_cast<std::size_t>(id) + 1], y))
-            throw std::logic_error("partitions " + std::to_string(parts[static_cast<std::size_t>(first_part[static_cast<std::size_t>(id)])].partition) +
-                                   " and " + std::to_string(part.partition) + " place lattice node (" +
-                                   std::to_string(grid::key2_x(key)) + ", " + std::to_string(grid::key2_y(key)) +
-                                   ") differently");
+          for (int d = 0; d < Dim; ++d)
+            if (!same_bits(coords[Dim * static_cast<std::size_t>(id) + d], m.coords[Dim * n + d]))
+              throw std::logic_error(
+                  "partitions " + std::to_string(parts[static_cast<std::size_t>(first_part[static_cast<std::size_t>(id)])].partition) +
+                  " and " + std::to_string(part.partition) + " place " + Id::name(key) + " differently");
         } else {
           keys.push_back(key);
-          coords.push_back(x);
-          coords.push_back(y);
+          for (int d = 0; d < Dim; ++d) coords.push_back(m.coords[Dim * n + d]);
           first_part.push_back(static_cast<std::int32_t>(&part - parts.data()));
           on_face.push_back(0);
         }
-        if (key != kInterior) {
-          const std::int64_t kx = grid::key2_x(key), ky = grid::key2_y(key);
-          const bool face = (kx == x0 && x0 != 0) || (kx == x1 && x1 != fx) || (ky == y0 && y0 != 0) ||
-                            (ky == y1 && y1 != fy);
+        if (!unshared) {
+          bool face = true;
+          for (std::uint64_t k : Id::lattice_keys(key)) face = face && on_inner_face(k);
           if (face) on_face[static_cast<std::size_t>(id)] = 1;
         }
       }
       for (std::size_t c = 0; c < m.cell_count(); ++c) {
-        for (int k = 0; k < 3; ++k) cells.cell_nodes.push_back(local[static_cast<std::size_t>(m.cell_nodes[3 * c + static_cast<std::size_t>(k)])]);
+        for (int k = 0; k < kCorners; ++k)
+          cells.cell_nodes.push_back(local[static_cast<std::size_t>(m.cell_nodes[kCorners * c + static_cast<std::size_t>(k)])]);
         cells.cell_phase.push_back(m.cell_phase[c]);
         cells.cell_partition.push_back(part.partition);
       }
-      part.result = pipeline::Result2{};  // release the partition's copy early
+      part.result = KernelResult<Dim>{};  // release the partition's copy early
     }
   });
 
-  // 2. Face keys to their rendezvous rank, with the lowest local partition.
+  // 2. Face identities to their rendezvous rank, with the lowest local partition.
   const std::size_t node_count = keys.size();
   std::vector<Packer> requests(static_cast<std::size_t>(size));
   for (std::size_t n = 0; n < node_count; ++n)
     if (on_face[n]) {
-      Packer& p = requests[home_rank(keys[n], size)];
+      Packer& p = requests[home_rank(keys[n])];
       p.put(keys[n]);
       p.put<std::int32_t>(parts[static_cast<std::size_t>(first_part[n])].partition);
     }
@@ -103,17 +197,17 @@ NumberedPiece2 merge_and_number2(const Comm& comm, std::vector<PartitionOutput2>
   std::vector<Bytes> received = comm.alltoallv(send);
 
   // 3. Rendezvous: owner = lowest claiming partition; tell every claimant.
-  std::vector<Claim> claims;
+  std::vector<Claim<Key>> claims;
   run_collectively(comm, [&] {
     for (int r = 0; r < size; ++r) {
       Unpacker u(received[static_cast<std::size_t>(r)]);
       while (!u.done()) {
-        const auto key = u.get<std::uint64_t>();
+        const auto key = u.get<Key>();
         const auto partition = u.get<std::int32_t>();
         claims.push_back({key, partition, r});
       }
     }
-    std::sort(claims.begin(), claims.end(), [](const Claim& a, const Claim& b) {
+    std::sort(claims.begin(), claims.end(), [](const Claim<Key>& a, const Claim<Key>& b) {
       return a.key != b.key ? a.key < b.key : a.partition < b.partition;
     });
   });
@@ -138,7 +232,7 @@ NumberedPiece2 merge_and_number2(const Comm& comm, std::vector<PartitionOutput2>
     for (const Bytes& b : received) {
       Unpacker u(b);
       while (!u.done()) {
-        const auto key = u.get<std::uint64_t>();
+        const auto key = u.get<Key>();
         const auto owner = u.get<std::int32_t>();
         const std::int32_t id = by_key.find(key);
         if (id < 0) throw std::logic_error("merge: a reply for a key this rank does not hold");
@@ -156,14 +250,13 @@ NumberedPiece2 merge_and_number2(const Comm& comm, std::vector<PartitionOutput2>
   piece.owned_nodes = owned_count;
   piece.global_nodes = comm.allreduce_sum(owned_count);
 
-  mesh::Mesh2& m = piece.mesh;
-  m.coords.resize(2 * node_count);
+  auto& m = piece.mesh;
+  m.coords.resize(Dim * node_count);
   m.node_global_id.assign(node_count, -1);
   piece.node_key.resize(node_count);
   for (std::size_t n = 0; n < node_count; ++n) {
     const auto id = static_cast<std::size_t>(new_id[n]);
-    m.coords[2 * id] = coords[2 * n];
-    m.coords[2 * id + 1] = coords[2 * n + 1];
+    for (int d = 0; d < Dim; ++d) m.coords[Dim * id + d] = coords[Dim * n + d];
     piece.node_key[id] = keys[n];
     if (owned[n]) m.node_global_id[id] = offset + static_cast<std::int64_t>(id);
   }
@@ -176,7 +269,7 @@ NumberedPiece2 merge_and_number2(const Comm& comm, std::vector<PartitionOutput2>
   std::vector<Packer> ids(static_cast<std::size_t>(size));
   for (std::size_t n = 0; n < node_count; ++n)
     if (on_face[n] && owned[n]) {
-      Packer& p = ids[home_rank(keys[n], size)];
+      Packer& p = ids[home_rank(keys[n])];
       p.put(keys[n]);
       p.put<std::int64_t>(m.node_global_id[static_cast<std::size_t>(new_id[n])]);
     }
@@ -184,16 +277,16 @@ NumberedPiece2 merge_and_number2(const Comm& comm, std::vector<PartitionOutput2>
   received = comm.alltoallv(send);
   std::vector<Packer> forward(static_cast<std::size_t>(size));
   run_collectively(comm, [&] {
-    std::vector<std::pair<std::uint64_t, std::int64_t>> known;
+    std::vector<std::pair<Key, std::int64_t>> known;
     for (const Bytes& b : received) {
       Unpacker u(b);
       while (!u.done()) {
-        const auto key = u.get<std::uint64_t>();
+        const auto key = u.get<Key>();
         known.emplace_back(key, u.get<std::int64_t>());
       }
     }
     std::sort(known.begin(), known.end());
-    for (const Claim& c : claims) {
+    for (const Claim<Key>& c : claims) {
       const auto it = std::lower_bound(known.begin(), known.end(), std::make_pair(c.key, std::int64_t{-1}));
       if (it == known.end() || it->first != c.key) throw std::logic_error("merge: a face node without owner");
       Packer& p = forward[static_cast<std::size_t>(c.rank)];
@@ -207,7 +300,7 @@ NumberedPiece2 merge_and_number2(const Comm& comm, std::vector<PartitionOutput2>
     for (const Bytes& b : received) {
       Unpacker u(b);
       while (!u.done()) {
-        const auto key = u.get<std::uint64_t>();
+        const auto key = u.get<Key>();
         const auto gid = u.get<std::int64_t>();
         m.node_global_id[static_cast<std::size_t>(new_id[static_cast<std::size_t>(by_key.find(key))])] = gid;
       }
@@ -218,8 +311,9 @@ NumberedPiece2 merge_and_number2(const Comm& comm, std::vector<PartitionOutput2>
   return piece;
 }
 
-mesh::Mesh2 gather_mesh2(const Comm& comm, const NumberedPiece2& piece, int root) {
-  const mesh::Mesh2& m = piece.mesh;
+template <int Dim>
+mesh::SimplexMesh<Dim> gather_mesh(const Comm& comm, const NumberedPiece<Dim>& piece, int root) {
+  const auto& m = piece.mesh;
   Packer p;
   p.put_vector(m.node_global_id);
   p.put_vector(m.coords);
@@ -230,27 +324,27 @@ mesh::Mesh2 gather_mesh2(const Comm& comm, const NumberedPiece2& piece, int root
   p.put_vector(m.cell_phase);
   p.put_vector(m.cell_partition);
   const std::vector<Bytes> all = gather_bytes(comm, p.take(), root);
-  mesh::Mesh2 out;
+  mesh::SimplexMesh<Dim> out;
   run_collectively(comm, [&] {
     if (comm.rank() != root) return;
     const auto n = static_cast<std::size_t>(piece.global_nodes);
-    out.coords.assign(2 * n, 0.0);
+    out.coords.assign(Dim * n, 0.0);
     std::vector<char> seen(n, 0);
     for (const Bytes& b : all) {
       Unpacker u(b);
       const auto gids = u.get_vector<GlobalId>();
-      const auto xy = u.get_vector<double>();
+      const auto xyz = u.get_vector<double>();
       const auto cg = u.get_vector<GlobalId>();
       const auto phase = u.get_vector<std::int32_t>();
       const auto partition = u.get_vector<std::int32_t>();
       for (std::size_t i = 0; i < gids.size(); ++i) {
         const auto g = static_cast<std::size_t>(gids[i]);
         if (g >= n) throw std::logic_error("gather: global id out of range");
-        if (seen[g] && (!same_bits(out.coords[2 * g], xy[2 * i]) || !same_bits(out.coords[2 * g + 1], xy[2 * i + 1])))
-          throw std::logic_error("gather: node " + std::to_string(g) + " has different coordinates on two ranks");
+        for (int d = 0; d < Dim; ++d)
+          if (seen[g] && !same_bits(out.coords[Dim * g + d], xyz[Dim * i + d]))
+            throw std::logic_error("gather: node " + std::to_string(g) + " has different coordinates on two ranks");
         seen[g] = 1;
-        out.coords[2 * g] = xy[2 * i];
-        out.coords[2 * g + 1] = xy[2 * i + 1];
+        for (int d = 0; d < Dim; ++d) out.coords[Dim * g + d] = xyz[Dim * i + d];
       }
       for (GlobalId g : cg) out.cell_nodes.push_back(static_cast<LocalId>(g));
       out.cell_phase.insert(out.cell_phase.end(), phase.begin(), phase.end());
@@ -263,5 +357,10 @@ mesh::Mesh2 gather_mesh2(const Comm& comm, const NumberedPiece2& piece, int root
   });
   return out;
 }
+
+template NumberedPiece<2> merge_and_number<2>(const Comm&, std::vector<PartitionOutput<2>>&, const grid::Lattice<2>&);
+template NumberedPiece<3> merge_and_number<3>(const Comm&, std::vector<PartitionOutput<3>>&, const grid::Lattice<3>&);
+template mesh::SimplexMesh<2> gather_mesh<2>(const Comm&, const NumberedPiece<2>&, int);
+template mesh::SimplexMesh<3> gather_mesh<3>(const Comm&, const NumberedPiece<3>&, int);
 
 }  // namespace cisamr::parallel

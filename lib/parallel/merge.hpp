@@ -1,51 +1,84 @@
 #pragma once
-// Merging the partitions' meshes by lattice key and numbering nodes globally (DESIGN.md §4).
+// Merging the partitions' meshes by lattice identity and numbering nodes globally
+// (DESIGN.md §4). One template for 2D and 3D.
 //
 // 2D needs one merge: every partition emits only the cells of its own box, all conforming
 // across box faces (subdivision creates no edge nodes in 2D, and a coarse cell whose
 // neighbour across the face is finer already closes over the hanging node, because its
 // forest saw that neighbour in the ghost layer). Shared nodes and the one-sided hanging
 // nodes of the paper are therefore both just lattice keys present in several partitions.
+//
+// 3D adds the paper's second merge, the interface nodes that subdivision creates on cut
+// edges: a node's identity is a pair, (key, key) for a lattice node, (smaller key, larger
+// key) of its edge for a cut node, (~0, ~0) for a closure Steiner point (interior to one
+// leaf, never shared: numbered without merging). Both merges are then one exchange of
+// identities on partition faces.
+#include <array>
 #include <cstdint>
+#include <type_traits>
 #include <vector>
 
 #include "core/comm.hpp"
 #include "grid/lattice.hpp"
 #include "mesh/simplex_mesh.hpp"
 #include "pipeline/pipeline.hpp"
+#include "pipeline/pipeline3.hpp"
 
 namespace cisamr::parallel {
 
-struct PartitionOutput2 {
-  int partition = 0;
-  grid::CellRange<2> box;  // its coarse cells
-  pipeline::Result2 result;
-};
+// What identifies a node across partitions: a 2D lattice key (Result2::kInteriorNode for
+// points interior to one cell), or the 3D pair of Result3::node_identity.
+template <int Dim>
+using NodeIdentity = std::conditional_t<Dim == 2, std::uint64_t, std::array<std::uint64_t, 2>>;
+template <int Dim>
+using KernelResult = std::conditional_t<Dim == 2, pipeline::Result2, pipeline::Result3>;
 
-struct NumberedPiece2 {
+template <int Dim>
+struct PartitionOutput {
+  int partition = 0;
+  grid::CellRange<Dim> box;  // its coarse cells
+  KernelResult<Dim> result;
+};
+using PartitionOutput2 = PartitionOutput<2>;
+using PartitionOutput3 = PartitionOutput<3>;
+
+template <int Dim>
+struct NumberedPiece {
   // This rank's cells (partition by partition, ascending); nodes: the ones it owns first,
   // then copies of nodes owned elsewhere. node_global_id set, cell_partition set.
-  mesh::Mesh2 mesh;
-  std::vector<std::uint64_t> node_key;  // lattice key, or Result2::kInteriorNode
+  mesh::SimplexMesh<Dim> mesh;
+  std::vector<NodeIdentity<Dim>> node_key;  // per node, its merge identity
   std::int64_t owned_nodes = 0;
   std::int64_t global_nodes = 0;
 };
+using NumberedPiece2 = NumberedPiece<2>;
+using NumberedPiece3 = NumberedPiece<3>;
 
 // Collective. `parts` must be this rank's partitions in ascending id order, and every
 // rank's partitions must be a block of consecutive ids, ranks in ascending order (then the
 // global ids do not depend on the number of ranks). Owner of a node: the lowest partition
 // that emits it (= the lowest partition whose closed box holds it, unless that partition's
 // cells there are all void). Global ids: owned nodes first, offset = exclusive scan of the
-// owned counts, in (owner partition, kernel output order). Keys on partition faces are
-// exchanged with a rendezvous rank (hash of the key), so corners shared by boxes that
-// touch only diagonally need no special case. Throws std::logic_error (a bug, not bad
-// input) when two partitions give the same key different coordinates.
-NumberedPiece2 merge_and_number2(const Comm& comm, std::vector<PartitionOutput2>& parts,
-                                 const grid::Lattice2& lattice);
+// owned counts, in (owner partition, kernel output order). Identities on partition faces
+// are exchanged with a rendezvous rank (hash of the identity), so corners shared by boxes
+// that touch only diagonally need no special case. Throws std::logic_error (a bug, not bad
+// input) when two partitions give the same identity different coordinates. Empties the
+// kernel results as it goes.
+template <int Dim>
+NumberedPiece<Dim> merge_and_number(const Comm& comm, std::vector<PartitionOutput<Dim>>& parts,
+                                    const grid::Lattice<Dim>& lattice);
+inline NumberedPiece2 merge_and_number2(const Comm& comm, std::vector<PartitionOutput2>& parts,
+                                        const grid::Lattice2& lattice) {
+  return merge_and_number<2>(comm, parts, lattice);
+}
 
 // Collective. The whole mesh on `root` (nodes in global-id order, cells by partition),
 // an empty mesh elsewhere. Checks that every copy of a node has the same coordinate bits
 // (std::logic_error otherwise).
-mesh::Mesh2 gather_mesh2(const Comm& comm, const NumberedPiece2& piece, int root = 0);
+template <int Dim>
+mesh::SimplexMesh<Dim> gather_mesh(const Comm& comm, const NumberedPiece<Dim>& piece, int root = 0);
+inline mesh::Mesh2 gather_mesh2(const Comm& comm, const NumberedPiece2& piece, int root = 0) {
+  return gather_mesh<2>(comm, piece, root);
+}
 
 }  // namespace cisamr::parallel

@@ -47,7 +47,8 @@ void remove_quietly(const std::string& path) {
 
 }  // namespace
 
-void write_pvtu2(const Comm& comm, const std::string& pvtu_path, const mesh::Mesh2& piece) {
+template <int Dim>
+void write_pvtu(const Comm& comm, const std::string& pvtu_path, const mesh::SimplexMesh<Dim>& piece) {
   const std::string final_path = piece_path(pvtu_path, comm.rank());
   const fs::path fp(final_path);
   const std::string temporary =
@@ -77,12 +78,20 @@ void write_pvtu2(const Comm& comm, const std::string& pvtu_path, const mesh::Mes
   }
 }
 
-void write_gathered2(const Comm& comm, const std::string& path, const mesh::Mesh2& gathered,
-                     const std::vector<geometry::Phase>& phases, int root) {
+template <int Dim>
+void write_gathered(const Comm& comm, const std::string& path, const mesh::SimplexMesh<Dim>& gathered,
+                    const std::vector<geometry::Phase>& phases, int root) {
   run_collectively(comm, [&] {
     if (comm.rank() == root) io::write_mesh(path, gathered, phases);
   });
 }
+
+template void write_pvtu<2>(const Comm&, const std::string&, const mesh::SimplexMesh<2>&);
+template void write_pvtu<3>(const Comm&, const std::string&, const mesh::SimplexMesh<3>&);
+template void write_gathered<2>(const Comm&, const std::string&, const mesh::SimplexMesh<2>&,
+                                const std::vector<geometry::Phase>&, int);
+template void write_gathered<3>(const Comm&, const std::string&, const mesh::SimplexMesh<3>&,
+                                const std::vector<geometry::Phase>&, int);
 
 std::vector<PhaseSpread> spread_over_ranks(const Comm& comm, const PhaseTimes& times,
                                            const std::vector<std::string>& names) {

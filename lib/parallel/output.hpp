@@ -20,11 +20,20 @@ std::string piece_path(const std::string& pvtu_path, int rank);
 // pieces are renamed into place; once every rank has, rank 0 writes the .pvtu (through
 // io::AtomicFile). A failure anywhere removes what this call wrote on every rank and is
 // thrown on every rank (collective.hpp).
-void write_pvtu2(const Comm& comm, const std::string& pvtu_path, const mesh::Mesh2& piece);
+template <int Dim>
+void write_pvtu(const Comm& comm, const std::string& pvtu_path, const mesh::SimplexMesh<Dim>& piece);
+inline void write_pvtu2(const Comm& comm, const std::string& pvtu_path, const mesh::Mesh2& piece) {
+  write_pvtu<2>(comm, pvtu_path, piece);
+}
 
 // Collective. Rank `root` writes `gathered` (any format io::write_mesh knows).
-void write_gathered2(const Comm& comm, const std::string& path, const mesh::Mesh2& gathered,
-                     const std::vector<geometry::Phase>& phases, int root = 0);
+template <int Dim>
+void write_gathered(const Comm& comm, const std::string& path, const mesh::SimplexMesh<Dim>& gathered,
+                    const std::vector<geometry::Phase>& phases, int root = 0);
+inline void write_gathered2(const Comm& comm, const std::string& path, const mesh::Mesh2& gathered,
+                            const std::vector<geometry::Phase>& phases, int root = 0) {
+  write_gathered<2>(comm, path, gathered, phases, root);
+}
 
 struct PhaseSpread {
   std::string name;

@@ -10,65 +10,82 @@
 namespace cisamr::pipeline {
 namespace {
 
-constexpr double kContactCells = 1.5;  // > √2: a cell of level l can touch two boundaries only closer than √2·h_l
-constexpr double kSpreadCells = 6.5;   // R4's 5×5 block, both cells' diagonals and a 2:1 cascade
+// Reach of the rules in cells of a level (effective_levels.hpp).
+template <int Dim>
+constexpr double kContactCells = Dim == 2 ? 1.5 : 1.8;  // > √Dim: a cell touches two boundaries only closer than √Dim·h_l
+template <int Dim>
+constexpr double kSpreadCells = Dim == 2 ? 6.5 : 8.0;  // 2D: R4's 5×5 block, both cells' diagonals, a 2:1 cascade
 
-// Bounding box without evaluating NURBS curves (their control polygon bounds them).
-Box2 box_of(const geometry::Shape& shape) {
-  if (const auto* c = std::get_if<geometry::NurbsCurve>(&shape)) {
-    Box2 b{{INFINITY, INFINITY}, {-INFINITY, -INFINITY}};
-    for (const Vec2& p : c->control_points)
-      for (int d = 0; d < 2; ++d) b.min[d] = std::min(b.min[d], p[d]), b.max[d] = std::max(b.max[d], p[d]);
-    return b;
+// Shapes whose distance is judged by their boxes (exact tests too slow or not available).
+bool by_box(const geometry::Shape& s) {
+  return std::holds_alternative<geometry::NurbsCurve>(s) || std::holds_alternative<geometry::StlSurface>(s) ||
+         std::holds_alternative<geometry::NurbsSurface>(s);
+}
+
+template <int Dim>
+double box_distance(const Box3& a, const Box3& b) {
+  double s = 0;
+  for (int d = 0; d < Dim; ++d) {
+    const double g = std::max({0.0, a.min[d] - b.max[d], b.min[d] - a.max[d]});
+    s += g * g;
   }
-  const Box3 b = geometry::shape_bounding_box(shape);
-  return Box2{{b.min[0], b.min[1]}, {b.max[0], b.max[1]}};
+  return std::sqrt(s);
 }
 
-bool is_nurbs(const geometry::Shape& s) { return std::holds_alternative<geometry::NurbsCurve>(s); }
-
-double box_distance(const Box2& a, const Box2& b) {
-  const double dx = std::max({0.0, a.min[0] - b.max[0], b.min[0] - a.max[0]});
-  const double dy = std::max({0.0, a.min[1] - b.max[1], b.min[1] - a.max[1]});
-  return std::hypot(dx, dy);
-}
-
-}  // namespace
-
-std::vector<int> effective_levels2(const geometry::SceneDesc& scene, const grid::Lattice2& lattice) {
+template <int Dim>
+std::vector<int> effective_levels(const geometry::SceneDesc& scene, const grid::Lattice<Dim>& lattice,
+                                  std::span<const Box3> known, std::span<const SurfacePair> surface_unions) {
   const std::size_t n = scene.inclusions.size();
   std::vector<int> level(n);
-  std::vector<Box2> box(n);
-  for (std::size_t k = 0; k < n; ++k) {
-    level[k] = std::min(std::max(0, scene.inclusions[k].levels), lattice.max_level);
-    box[k] = box_of(scene.inclusions[k].shape);
-  }
+  for (std::size_t k = 0; k < n; ++k) level[k] = std::min(std::max(0, scene.inclusions[k].levels), lattice.max_level);
   if (n < 2) return level;
+  const std::vector<Box3> box = holding_boxes(scene, known);
 
   // Candidate pairs: boxes closer than the widest reach (coarsest level), by buckets.
   int min_level = lattice.max_level;
   for (int l : level) min_level = std::min(min_level, l);
-  const double reach = kSpreadCells * lattice.spacing(min_level);
+  const double reach = kSpreadCells<Dim> * lattice.spacing(min_level);
   const double side = std::max(reach, 4 * lattice.h);
-  const double x0 = scene.domain_min[0], y0 = scene.domain_min[1];
-  const auto bucket = [&](double v, double origin) { return static_cast<std::int64_t>(std::floor((v - origin) / side)); };
-  std::int64_t bx0 = INT64_MAX, by0 = INT64_MAX, bx1 = INT64_MIN, by1 = INT64_MIN;
-  for (const Box2& b : box) {
-    bx0 = std::min(bx0, bucket(b.min[0], x0)), by0 = std::min(by0, bucket(b.min[1], y0));
-    bx1 = std::max(bx1, bucket(b.max[0], x0)), by1 = std::max(by1, bucket(b.max[1], y0));
+  using Cell = std::array<std::int64_t, Dim>;
+  const auto bucket = [&](const Vec3& p) {
+    Cell c{};
+    for (int d = 0; d < Dim; ++d)
+      c[d] = static_cast<std::int64_t>(std::floor((p[d] - scene.domain_min[static_cast<std::size_t>(d)]) / side));
+    return c;
+  };
+  Cell lo{}, hi{};
+  for (int d = 0; d < Dim; ++d) lo[d] = INT64_MAX, hi[d] = INT64_MIN;
+  for (const Box3& b : box) {
+    const Cell a = bucket(b.min), c = bucket(b.max);
+    for (int d = 0; d < Dim; ++d) lo[d] = std::min(lo[d], a[d]), hi[d] = std::max(hi[d], c[d]);
   }
-  const std::int64_t nbx = bx1 - bx0 + 1, nby = by1 - by0 + 1;
-  std::vector<std::vector<std::int32_t>> buckets(static_cast<std::size_t>(nbx * nby));
+  // Visits the buckets of [a, c] clipped to the grid, as flat indices.
+  const auto for_buckets = [&](Cell a, Cell c, auto&& f) {
+    for (int d = 0; d < Dim; ++d) {
+      a[d] = std::max(a[d], lo[d]), c[d] = std::min(c[d], hi[d]);
+      if (a[d] > c[d]) return;
+    }
+    Cell at = a;
+    while (true) {
+      std::int64_t flat = 0;
+      for (int d = Dim - 1; d >= 0; --d) flat = flat * (hi[d] - lo[d] + 1) + (at[d] - lo[d]);
+      f(static_cast<std::size_t>(flat));
+      int d = 0;
+      while (d < Dim && at[d] == c[d]) at[d] = a[d], ++d;
+      if (d == Dim) return;
+      ++at[d];
+    }
+  };
+  std::int64_t buckets = 1;
+  for (int d = 0; d < Dim; ++d) buckets *= hi[d] - lo[d] + 1;
+  std::vector<std::vector<std::int32_t>> members(static_cast<std::size_t>(buckets));
   for (std::size_t k = 0; k < n; ++k)
-    for (std::int64_t j = bucket(box[k].min[1], y0); j <= bucket(box[k].max[1], y0); ++j)
-      for (std::int64_t i = bucket(box[k].min[0], x0); i <= bucket(box[k].max[0], x0); ++i)
-        buckets[static_cast<std::size_t>((j - by0) * nbx + (i - bx0))].push_back(static_cast<std::int32_t>(k));
-  // Closer than `gap`? Exact for analytic shapes; for NURBS curves (slow to bound) the
-  // boxes decide, which can only over-refine.
+    for_buckets(bucket(box[k].min), bucket(box[k].max), [&](std::size_t b) { members[b].push_back(static_cast<std::int32_t>(k)); });
+  // Closer than `gap`? Exact for analytic shapes; by boxes otherwise (can only over-refine).
   const auto close = [&](std::size_t i, std::size_t j, double gap) {
     const auto& a = scene.inclusions[i].shape;
     const auto& b = scene.inclusions[j].shape;
-    if (is_nurbs(a) || is_nurbs(b)) return box_distance(box[i], box[j]) < gap;
+    if (by_box(a) || by_box(b)) return box_distance<Dim>(box[i], box[j]) < gap;
     return geometry::shapes_overlap(a, b, gap);
   };
   struct Pair {
@@ -78,30 +95,33 @@ std::vector<int> effective_levels2(const geometry::SceneDesc& scene, const grid:
   std::vector<Pair> pairs;
   std::vector<std::vector<std::int32_t>> neighbours(n);
   for (std::size_t k = 0; k < n; ++k) {
-    const std::int64_t i0 = bucket(box[k].min[0] - reach, x0), i1 = bucket(box[k].max[0] + reach, x0);
-    const std::int64_t j0 = bucket(box[k].min[1] - reach, y0), j1 = bucket(box[k].max[1] + reach, y0);
-    for (std::int64_t j = std::max(j0, by0); j <= std::min(j1, by1); ++j)
-      for (std::int64_t i = std::max(i0, bx0); i <= std::min(i1, bx1); ++i)
-        for (std::int32_t m : buckets[static_cast<std::size_t>((j - by0) * nbx + (i - bx0))]) {
-          if (m <= static_cast<std::int32_t>(k)) continue;
-          if (std::find(neighbours[k].begin(), neighbours[k].end(), m) != neighbours[k].end()) continue;
-          if (box_distance(box[k], box[static_cast<std::size_t>(m)]) >= reach) continue;
-          neighbours[k].push_back(m);
-          const auto& a = scene.inclusions[k];
-          const auto& b = scene.inclusions[static_cast<std::size_t>(m)];
-          const bool same_union = a.phase == b.phase && !is_nurbs(a.shape) && !is_nurbs(b.shape) &&
-                                  geometry::shapes_overlap(a.shape, b.shape, 0);
-          pairs.push_back({static_cast<std::int32_t>(k), m, same_union});
-        }
+    Vec3 a = box[k].min, c = box[k].max;
+    for (int d = 0; d < 3; ++d) a[d] -= reach, c[d] += reach;
+    for_buckets(bucket(a), bucket(c), [&](std::size_t b) {
+      for (std::int32_t m : members[b]) {
+        if (m <= static_cast<std::int32_t>(k)) continue;
+        if (std::find(neighbours[k].begin(), neighbours[k].end(), m) != neighbours[k].end()) continue;
+        if (box_distance<Dim>(box[k], box[static_cast<std::size_t>(m)]) >= reach) continue;
+        neighbours[k].push_back(m);
+        const auto& x = scene.inclusions[k];
+        const auto& y = scene.inclusions[static_cast<std::size_t>(m)];
+        const bool surfaces = by_box(x.shape) || by_box(y.shape);
+        const bool same_union =
+            x.phase == y.phase && (surfaces ? std::binary_search(surface_unions.begin(), surface_unions.end(),
+                                                                 SurfacePair{static_cast<std::int32_t>(k), m})
+                                            : geometry::shapes_overlap(x.shape, y.shape, 0));
+        pairs.push_back({static_cast<std::int32_t>(k), m, same_union});
+      }
+    });
   }
   // Contacts (R2), at the initial levels: the first level whose cells cannot touch both.
   for (const Pair& p : pairs) {
     if (p.union_of_one_phase) continue;
     const auto a = static_cast<std::size_t>(p.a), b = static_cast<std::size_t>(p.b);
     int l = std::max(level[a], level[b]);
-    while (l < lattice.max_level && close(a, b, kContactCells * lattice.spacing(l))) ++l;
-    level[static_cast<std::size_t>(p.a)] = std::max(level[static_cast<std::size_t>(p.a)], l);
-    level[static_cast<std::size_t>(p.b)] = std::max(level[static_cast<std::size_t>(p.b)], l);
+    while (l < lattice.max_level && close(a, b, kContactCells<Dim> * lattice.spacing(l))) ++l;
+    level[a] = std::max(level[a], l);
+    level[b] = std::max(level[b], l);
   }
   // Spread (R4): repeat until no level changes. Each pass can only raise levels, which are
   // bounded by Lmax, so this ends; distances are tested once per pair and level.
@@ -119,13 +139,75 @@ std::vector<int> effective_levels2(const geometry::SceneDesc& scene, const grid:
     for (const auto& [i, union_pair] : adjacency[static_cast<std::size_t>(j)]) {
       const int li = level[static_cast<std::size_t>(i)];
       if (li >= lj) continue;
-      if (!union_pair && !close(static_cast<std::size_t>(i), static_cast<std::size_t>(j), kSpreadCells * lattice.spacing(li)))
+      if (!union_pair &&
+          !close(static_cast<std::size_t>(i), static_cast<std::size_t>(j), kSpreadCells<Dim> * lattice.spacing(li)))
         continue;
       level[static_cast<std::size_t>(i)] = lj;
       work.push_back(i);
     }
   }
   return level;
+}
+
+}  // namespace
+
+std::vector<Box3> holding_boxes(const geometry::SceneDesc& scene, std::span<const Box3> known) {
+  std::vector<Box3> out;
+  out.reserve(scene.inclusions.size());
+  for (std::size_t k = 0; k < scene.inclusions.size(); ++k) {
+    const geometry::Shape& shape = scene.inclusions[k].shape;
+    // geometry's tight box of a NURBS curve costs ~0.2 s per curve: too much for a scene.
+    if (const auto* c = std::get_if<geometry::NurbsCurve>(&shape); c != nullptr && !c->control_points.empty()) {
+      const Vec2& p0 = c->control_points.front();
+      Box3 b{{p0[0], p0[1], 0}, {p0[0], p0[1], 0}};
+      for (const Vec2& p : c->control_points)
+        for (int d = 0; d < 2; ++d) b.min[d] = std::min(b.min[d], p[d]), b.max[d] = std::max(b.max[d], p[d]);
+      out.push_back(b);
+      continue;
+    }
+    const auto* stl = std::get_if<geometry::StlSurface>(&shape);
+    if (stl != nullptr && stl->triangles.empty() && k < known.size()) {
+      out.push_back(known[k]);
+      continue;
+    }
+    out.push_back(geometry::shape_bounding_box(shape));
+  }
+  return out;
+}
+
+std::vector<SurfacePair> surface_unions(const geometry::SceneDesc& scene) {
+  const std::vector<Box3> box = holding_boxes(scene);
+  std::vector<SurfacePair> out;
+  // Sorted boxes along x: a sweep finds the pairs whose boxes meet.
+  std::vector<std::int32_t> order(scene.inclusions.size());
+  for (std::size_t k = 0; k < order.size(); ++k) order[k] = static_cast<std::int32_t>(k);
+  std::sort(order.begin(), order.end(), [&](std::int32_t a, std::int32_t b) {
+    return box[static_cast<std::size_t>(a)].min[0] < box[static_cast<std::size_t>(b)].min[0];
+  });
+  for (std::size_t i = 0; i < order.size(); ++i) {
+    const auto a = static_cast<std::size_t>(order[i]);
+    for (std::size_t j = i + 1; j < order.size(); ++j) {
+      const auto b = static_cast<std::size_t>(order[j]);
+      if (box[b].min[0] > box[a].max[0]) break;
+      const auto& x = scene.inclusions[a];
+      const auto& y = scene.inclusions[b];
+      if (x.phase != y.phase || !(by_box(x.shape) || by_box(y.shape))) continue;
+      if (!boxes_overlap(box[a], box[b])) continue;
+      if (geometry::shapes_overlap(x.shape, y.shape, 0))
+        out.push_back({static_cast<std::int32_t>(std::min(a, b)), static_cast<std::int32_t>(std::max(a, b))});
+    }
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+std::vector<int> effective_levels2(const geometry::SceneDesc& scene, const grid::Lattice2& lattice) {
+  return effective_levels<2>(scene, lattice, {}, {});
+}
+
+std::vector<int> effective_levels3(const geometry::SceneDesc& scene, const grid::Lattice<3>& lattice,
+                                   std::span<const Box3> known, std::span<const SurfacePair> unions) {
+  return effective_levels<3>(scene, lattice, known, unions);
 }
 
 }  // namespace cisamr::pipeline

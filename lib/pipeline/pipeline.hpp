@@ -16,6 +16,12 @@ namespace cisamr::pipeline {
 struct Options {
   double alpha = 0.5;    // r-adaptivity threshold (fraction of the edge length)
   int extra_levels = 3;  // levels beyond the largest requested one that rule R2 may use
+  // 3D only (radapt::Options3): snap reach along face diagonals, and the aspect-ratio bound
+  // the snapping guard enforces on every tetrahedron (0: no guard).
+  double alpha_diagonal3 = 0.2;
+  int max_candidates3 = 2;  // snap candidates per node the 3D guard considers
+  double bound3 = 5.0;
+  double swap_trigger3 = 3.0;  // corner tets above this aspect ratio look for a face swap (0: none)
 };
 
 struct Stats {

@@ -4,6 +4,8 @@
 #include <cmath>
 
 #include "core/error.hpp"
+#include "pipeline/effective_levels.hpp"
+#include "faceswap/faceswap3.hpp"
 #include "radapt/radapt3.hpp"
 #include "samr/samr3.hpp"
 #include "subdivide/subdivide3.hpp"
@@ -48,14 +50,30 @@ Result3 run3(const geometry::Oracle3& oracle, const grid::Lattice3& lattice, con
 
   radapt::Nodes3 nodes = [&] {
     ScopedPhase timer(&stats.times, "radapt");
-    return radapt::snap3(oracle, grid, radapt::Options3{options.alpha});
+    return radapt::snap3(oracle, grid,
+                         radapt::Options3{.alpha = options.alpha, .alpha_diagonal = options.alpha_diagonal3,
+                                          .max_candidates = options.max_candidates3,
+                                          .bound = options.bound3});
   }();
   stats.lattice_nodes = static_cast<std::int64_t>(nodes.key.size());
   stats.snapped_nodes = nodes.snapped_count;
+  stats.refused_nodes = nodes.refused_count;
+  stats.collapsed_nodes = nodes.collapsed_count;
+  stats.collapsed_cut_points = nodes.collapsed_cut_points;
+  stats.max_collapse_deviation = nodes.max_collapse_deviation;
+  stats.guarded_leaves = nodes.guarded_leaves;
+  stats.guard_combinations = nodes.combinations;
+  stats.missing_crossings = nodes.missing_crossings;
+
+  const faceswap::Swaps3 swaps = [&] {
+    ScopedPhase timer(&stats.times, "faceswap");
+    return faceswap::swap3(oracle, grid, nodes, faceswap::Options3{.trigger = options.swap_trigger3});
+  }();
+  stats.face_swaps = swaps.swaps;
 
   subdivide::Tets3 tets = [&] {
     ScopedPhase timer(&stats.times, "subdivide");
-    return subdivide::subdivide3(oracle, grid, nodes, box);
+    return subdivide::subdivide3(oracle, grid, nodes, box, &swaps);
   }();
   stats.cut_tets = tets.cut_tets;
   stats.cut_nodes = tets.cut_nodes;
@@ -63,11 +81,11 @@ Result3 run3(const geometry::Oracle3& oracle, const grid::Lattice3& lattice, con
   stats.steiner_points = tets.steiner_points;
   stats.unresolved = tets.unresolved;
   stats.inverted = tets.inverted;
-  stats.missing_crossings = tets.missing_crossings;
   stats.max_level = lattice.max_level;
   stats.worst_closure = tets.worst_closure;
   stats.worst_kept = tets.worst_kept;
   stats.worst_split = tets.worst_split;
+  stats.worst_swapped = tets.worst_swapped;
   stats.kept_above_5 = tets.kept_above_5;
   stats.split_above_5 = tets.split_above_5;
 
@@ -114,7 +132,11 @@ Result3 run3(const geometry::Oracle3& oracle, const grid::Lattice3& lattice, con
 
 Result3 mesh3_with_stats(const geometry::Oracle3& oracle, const Options& options) {
   const grid::Lattice3 lattice = make_lattice3(oracle, options);
-  return run3(oracle, lattice, lattice.whole_domain(), 0, options);
+  // The levels the parallel mesher settles for every partition (effective_levels.hpp), so
+  // that one process and any number of partitions mesh alike.
+  const std::vector<int> levels =
+      effective_levels3(oracle.scene(), lattice, {}, surface_unions(oracle.scene()));
+  return run3(oracle, lattice, lattice.whole_domain(), 0, options, 0, levels);
 }
 
 mesh::Mesh3 mesh3(const geometry::Oracle3& oracle, const Options& options) {

@@ -1,6 +1,6 @@
 #pragma once
-// The sequential 3D mesher: box (+ghost) → tet forest → SAMR → r-adaptivity →
-// subdivision → mesh (lib/pipeline/README3.md). Face swapping is not in yet.
+// The sequential 3D mesher: box (+ghost) → tet forest → SAMR → r-adaptivity with the
+// quality guard → face swapping → subdivision → mesh (lib/pipeline/README3.md).
 #include <array>
 #include <cstdint>
 #include <span>
@@ -21,12 +21,20 @@ struct Stats3 {
   std::int64_t cut_tets = 0, cut_nodes = 0, closed_tets = 0, steiner_points = 0;
   std::int64_t unresolved = 0;         // cut leaves holding more than one interface (kept whole)
   std::int64_t inverted = 0;           // output tets with non-positive volume
-  std::int64_t missing_crossings = 0;  // cut edges without an oracle crossing (midpoint used)
+  std::int64_t missing_crossings = 0;  // phase-changing edges without an oracle crossing (midpoint used)
   int max_level = 0;                   // Lmax of the lattice
   // Worst aspect ratio by origin (before dropping voids): closures of hanging midpoints,
   // leaves kept whole (maybe deformed by snapping), sub-tets of cut leaves; counts above 5.
-  double worst_closure = 0, worst_kept = 0, worst_split = 0;
+  double worst_closure = 0, worst_kept = 0, worst_split = 0, worst_swapped = 0;
   std::int64_t kept_above_5 = 0, split_above_5 = 0;
+  std::int64_t face_swaps = 0;         // pairs of cubes whose shared face was swapped
+  // The snapping guard (radapt/radapt3.hpp): nodes that did not get their first option,
+  // nodes collapsed onto an interface they do not lie on, cut points standing for a gap
+  // thinner than their edge, and the largest distance of either from a phase it serves;
+  // leaves and option combinations checked.
+  std::int64_t refused_nodes = 0, collapsed_nodes = 0, collapsed_cut_points = 0;
+  double max_collapse_deviation = 0;
+  std::int64_t guarded_leaves = 0, guard_combinations = 0;
   PhaseTimes times;
 };
 
@@ -55,7 +63,8 @@ grid::Lattice3 make_lattice3(const geometry::Oracle3& oracle, const Options& opt
 Result3 run3(const geometry::Oracle3& oracle, const grid::Lattice3& lattice, const grid::CellRange<3>& box,
              int ghost, const Options& options, int partition_id = 0, std::span<const int> levels = {});
 
-// The whole domain in one box.
+// The whole domain in one box, with the levels effective_levels3 settles (as every
+// partition of the parallel mesher uses).
 Result3 mesh3_with_stats(const geometry::Oracle3& oracle, const Options& options = {});
 mesh::Mesh3 mesh3(const geometry::Oracle3& oracle, const Options& options = {});
 

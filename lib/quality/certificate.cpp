@@ -69,13 +69,21 @@ std::vector<Counter> conformity_counters(const ConformityReport& r) {
   };
 }
 
-std::vector<Counter> fidelity_counters(const FidelityReport& f) {
-  return {
+// The centroid check exists in 3D only.
+std::vector<Counter> fidelity_counters(const FidelityReport& f, int dimension) {
+  std::vector<Counter> counters{
       {"nodes_off_phase", "nodes off their phase", f.nodes_off_phase, true},
       {"interface_nodes_off_interface", "interface nodes off the interface", f.interface_nodes_off_interface, true},
       {"boundary_nodes_off_void", "void-boundary nodes off every void", f.boundary_nodes_off_void, true},
       {"cells_unknown_phase", "cells of an unknown or void phase", f.cells_unknown_phase, true},
   };
+  if (dimension == 3) {
+    counters.push_back({"cells_wrong_phase", "cells lying in another phase (centroid beyond half their size)",
+                        f.cells_wrong_phase, true});
+    counters.push_back({"cells_off_phase", "cells straddling an interface beyond the slack (allowed)", f.cells_off_phase,
+                        false});
+  }
+  return counters;
 }
 
 bool measure_checked(const ConformityReport& r) { return r.expected_measure >= 0; }
@@ -240,8 +248,9 @@ std::string certificate_json(const Certificate& c) {
     Json fid;
     fid["ok"] = f.ok;
     fid["tolerance"] = f.tolerance;
-    for (const Counter& k : fidelity_counters(f)) fid[k.key] = k.value;
+    for (const Counter& k : fidelity_counters(f, c.dimension)) fid[k.key] = k.value;
     fid["max_deviation"] = number(f.max_deviation);
+    if (c.dimension == 3) fid["max_centroid_ratio"] = number(f.max_centroid_ratio);
     Json per = Json::array();
     for (std::size_t k = 0; k < f.phase_id.size(); ++k)
       per.push_back({{"phase", f.phase_id[k]},
@@ -335,9 +344,14 @@ std::string certificate_html(const Certificate& c) {
   o << "<h2>Phase fidelity</h2>\n";
   if (c.fidelity) {
     const FidelityReport& f = *c.fidelity;
-    o << "<p>Tolerance " << num(f.tolerance, 3) << "; largest deviation found " << num(f.max_deviation, 3) << ".</p>\n";
+    o << "<p>Tolerance " << num(f.tolerance, 3) << "; largest deviation found " << num(f.max_deviation, 3);
+    if (c.dimension == 3)
+      o << "; largest centroid distance to its cell's phase " << num(f.max_centroid_ratio, 3)
+        << " of the cell's longest edge (allowed " << num(kCentroidSlack) << ", " << num(kInterfaceCentroidSlack)
+        << " for cells with every vertex on an interface)";
+    o << ".</p>\n";
     o << "<table>\n<tr><th>check</th><th>count</th><th></th></tr>\n";
-    for (const Counter& k : fidelity_counters(f))
+    for (const Counter& k : fidelity_counters(f, c.dimension))
       o << "<tr><td>" << k.label << "</td><td class=\"n\">" << k.value << "</td>" << status_cell(k.value == 0) << "</tr>\n";
     o << "</table>\n<table>\n<tr><th>phase</th><th>meshed measure</th><th>exact measure</th><th>relative error</th></tr>\n";
     for (std::size_t k = 0; k < f.phase_id.size(); ++k) {
@@ -398,11 +412,20 @@ std::string certificate_summary(const Certificate& c) {
       o << "ok (largest deviation " << num(f.max_deviation, 3) << ", tolerance " << num(f.tolerance, 3) << ")";
     } else {
       std::string problems;
-      for (const Counter& k : fidelity_counters(f))
+      for (const Counter& k : fidelity_counters(f, c.dimension))
         if (k.value > 0) problems += (problems.empty() ? "" : ", ") + std::to_string(k.value) + " " + k.label;
       o << "FAILED (" << problems << "; largest deviation " << num(f.max_deviation, 3) << ")";
     }
     o << "\n";
+    if (c.dimension == 3)  // the volumes converge as h → 0: reported, not judged
+      for (std::size_t k = 0; k < f.phase_id.size(); ++k) {
+        o << "phase " << f.phase_id[k] << (f.phase_name[k].empty() ? "" : " (" + f.phase_name[k] + ")") << ": ";
+        if (f.phase_is_void[k])
+          o << "void, exact volume " << num(f.exact_phase_measure[k], 6) << "\n";
+        else
+          o << "volume " << num(f.phase_measure[k], 6) << ", exact " << num(f.exact_phase_measure[k], 6)
+            << ", relative error " << num(f.relative_error[k], 3) << "\n";
+      }
   }
   for (const auto& n : c.notes) o << "note: " << n << "\n";
   o << "certificate: " << (c.passed() ? "PASSED" : "FAILED") << "\n";

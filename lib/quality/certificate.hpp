@@ -14,6 +14,7 @@
 
 namespace cisamr::geometry {
 class Oracle2;
+class Oracle3;
 struct SceneDesc;
 }  // namespace cisamr::geometry
 
@@ -65,8 +66,13 @@ Certificate certify(const mesh::SimplexMesh<Dim>& m, const Box<Dim>& domain, con
 // phase-fidelity check. options.expected_measure/allow_inner_boundary are ignored.
 Certificate certify(const mesh::Mesh2& m, const geometry::Oracle2& oracle, const CertifyOptions& options);
 
-// Against a scene, 3D: domain from the scene; expected measure = domain volume when the
-// scene has no void (not checked otherwise); no fidelity check yet (no 3D oracle).
+// Against a scene, 3D, as the 2D one: domain from the scene, expected volume = domain −
+// voids (Oracle3::phase_volumes), inner boundary allowed iff the scene has a void phase,
+// plus the 3D phase-fidelity check (nodes, centroids, per-phase volumes).
+Certificate certify(const mesh::Mesh3& m, const geometry::Oracle3& oracle, const CertifyOptions& options);
+
+// Against a scene without its oracle (cheap; no fidelity): domain from the scene; expected
+// volume = domain volume when the scene has no void (not checked otherwise).
 Certificate certify(const mesh::Mesh3& m, const geometry::SceneDesc& scene, const CertifyOptions& options);
 
 std::string certificate_json(const Certificate& c);     // format "cisamr-certificate/1"

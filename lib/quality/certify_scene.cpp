@@ -75,9 +75,9 @@ Certificate certify(const mesh::Mesh3& m, const geometry::SceneDesc& scene, cons
     c.notes.erase(std::remove_if(c.notes.begin(), c.notes.end(),
                                  [](const std::string& n) { return n.rfind("total measure", 0) == 0; }),
                   c.notes.end());
-    c.notes.push_back("the scene has voids: total volume not checked (no exact void volumes in 3D yet)");
+    c.notes.push_back("the scene has voids: total volume not checked (certified without the geometry oracle)");
   }
-  c.notes.push_back("phase fidelity not checked: no 3D geometry oracle yet");
+  c.notes.push_back("phase fidelity not checked (certified without the geometry oracle)");
   return c;
 }
 

@@ -6,6 +6,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -14,6 +15,7 @@
 
 namespace cisamr::geometry {
 class Oracle2;
+class Oracle3;
 struct SceneDesc;
 }  // namespace cisamr::geometry
 
@@ -100,8 +102,24 @@ ConformityReport check_conformity(const mesh::SimplexMesh<Dim>& m, const Box<Dim
                                   double measure_tolerance = kDefaultMeasureTolerance);
 
 // ---------------------------------------------------------------------------------------
-// Phase fidelity (DESIGN.md §2.3), 2D.
+// Phase fidelity (DESIGN.md §2.3), 2D and 3D.
 // ---------------------------------------------------------------------------------------
+
+// 3D centroid check (README.md, "Phase fidelity"): the centroid of a phase-k tetrahedron
+// may lie outside phase k by at most max(tol, slack · l_max), l_max its longest edge. A
+// tet whose vertices all lie on phase k's boundary (every vertex's closure holds another
+// phase) hugs a curved surface: its centroid is off by the surface's sagitta, which only
+// the curvature bounds, hence the larger slack. A tet with a vertex strictly inside phase
+// k reaches at most a few per cent of l_max outside it. A tet of the wrong phase is off by
+// a sizeable fraction of its size.
+inline constexpr double kCentroidSlack = 0.1;
+inline constexpr double kInterfaceCentroidSlack = 0.25;
+// A centroid farther than this fraction of the tet's longest edge from the tet's phase
+// (beyond tol) means the tet lies in another phase: that fails the check. Between the
+// slack above and this, the tet straddles an interface more than a smooth, resolved
+// interface explains (a crease, a collapsed node, a feature below the resolution): it is
+// counted and reported, not failed.
+inline constexpr double kWrongPhaseRatio = 0.5;
 
 struct FidelityReport {
   bool ok = false;
@@ -114,7 +132,17 @@ struct FidelityReport {
   // every void phase.
   std::size_t boundary_nodes_off_void = 0;
   std::size_t cells_unknown_phase = 0;  // cell phase id not in the scene, or a void phase
-  double max_deviation = 0;             // largest distance found in the checks above
+  double max_deviation = 0;             // largest distance found in the node checks above
+  // With strict_tol ≥ 0 (3D): nodes of the checks above farther than strict_tol (≤ tol) from
+  // a phase they serve, e.g. the nodes a collapse moved off, checked against tol.
+  std::size_t nodes_beyond_strict = 0;
+  // 3D only (0 in 2D): cells whose centroid lies farther from their phase than the slack
+  // (kCentroidSlack, kInterfaceCentroidSlack; reported), cells whose centroid lies beyond
+  // kWrongPhaseRatio of their longest edge (a failure), and the largest ratio (centroid's
+  // distance to the cell's phase) / (cell's longest edge) found.
+  std::size_t cells_off_phase = 0;
+  std::size_t cells_wrong_phase = 0;
+  double max_centroid_ratio = 0;
   // Indexed by the scene's phase index. Void phases are not meshed: their phase_measure
   // is 0 and their relative_error NaN.
   std::vector<int> phase_id;
@@ -128,6 +156,16 @@ struct FidelityReport {
 double default_fidelity_tolerance(const geometry::SceneDesc& scene);
 
 FidelityReport check_fidelity(const mesh::Mesh2& m, const geometry::Oracle2& oracle, double tol);
+
+// 3D: the node checks of the 2D version (a node within tol of the closure of every phase
+// of its cells, void-boundary nodes on a void), the centroid check above, and per-phase
+// volumes against Oracle3::phase_volumes() (spheres, ellipsoids, cylinders and closed STL
+// surfaces, clipped by the box, overlapping unions included).
+// `exact_volumes`: the oracle's phase_volumes() when the caller has them already (they
+// are integrated for clipped or overlapping inclusions); empty: computed here.
+// `strict_tol` (optional, ≤ tol): also count the nodes beyond it (nodes_beyond_strict).
+FidelityReport check_fidelity(const mesh::Mesh3& m, const geometry::Oracle3& oracle, double tol,
+                              std::span<const double> exact_volumes = {}, double strict_tol = -1);
 
 // ---------------------------------------------------------------------------------------
 // Small helpers shared by the certificate and the command.

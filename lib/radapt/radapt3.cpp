@@ -1,140 +1,486 @@
 #include "radapt/radapt3.hpp"
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
+#include <string>
+#include <unordered_map>
+#include <utility>
+
+#include "grid/cut_stencil3.hpp"
+#include "mesh/metrics.hpp"
 
 namespace cisamr::radapt {
 namespace {
 
+namespace tet = grid::tet;
+using grid::LatticeKey3;
+using grid::LatticePoint3;
+
 int single_phase(PhaseMask m) { return std::popcount(m) == 1 ? std::countr_zero(m) : -1; }
+
+enum class OptionKind : std::uint8_t { snap, stay, collapse };
+constexpr int kMaxMenu = 8;  // options of one node: at most max_candidates snaps, stay, collapse
+
+struct Option {
+  Vec3 position{};
+  PhaseMask mask = 0;
+  double score = 0;  // refusal priority: the guard refuses the highest first
+  OptionKind kind = OptionKind::stay;
+};
+
+// A snap candidate before the options are assembled.
+struct Candidate {
+  std::int32_t node = 0;
+  double distance = 0;     // length of the move
+  double fraction = 0;     // of its edge's length
+  LatticeKey3 other = 0;   // the edge's other end: a fixed tie-break
+  Vec3 position{};
+  PhaseMask mask = 0;
+};
+
+// Crossings of one phase-changing edge nearest each end, for snap candidates.
+struct EdgeEnds {
+  bool axis = true;
+  double length = 0;
+  bool any = false;
+  double t_front = 0, t_back = 0;  // along lo → hi
+  PhaseMask mask_front = 0, mask_back = 0;
+};
+
+class Snapper {
+ public:
+  Snapper(const geometry::Oracle3& oracle, const samr::RefinedGrid3& g, const Options3& options)
+      : oracle_(oracle), g_(g), forest_(g.forest), lattice_(g.forest.lattice()), options_(options) {}
+
+  Nodes3 run() {
+    register_nodes();
+    find_edges();
+    build_options();
+    if (options_.bound > 0) guard();
+    apply();
+    return std::move(nodes_);
+  }
+
+ private:
+  const geometry::Oracle3& oracle_;
+  const samr::RefinedGrid3& g_;
+  const grid::TetForest& forest_;
+  const grid::Lattice3& lattice_;
+  const Options3 options_;
+  Nodes3 nodes_;
+  std::vector<LatticePoint3> point_;  // lattice point per node
+  std::vector<EdgeEnds> ends_;        // per edge of nodes_.edges
+  // Options per node (CSR); nodes without a phase change nearby have none (they stay).
+  std::vector<std::int32_t> option_begin_;
+  std::vector<Option> option_;
+  std::vector<std::uint8_t> refused_;
+  std::vector<PhaseMask> collapse_mask_;
+  // Per node and phase joined by a collapse: the distance to the nearest point known to lie
+  // on that phase's boundary (a crossing on a phase-changing edge, or the neighbour itself),
+  // an upper bound of the collapse's deviation tighter than the oracle's for STL unions.
+  std::unordered_map<std::uint64_t, double> reach_;
+  std::vector<geometry::Crossing> crossings_;
+
+  std::size_t node_count() const { return nodes_.key.size(); }
+  int option_count(std::int32_t v) const {
+    return option_begin_[static_cast<std::size_t>(v) + 1] - option_begin_[static_cast<std::size_t>(v)];
+  }
+
+  // 1. Vertices of every leaf and their closure masks. A leaf that no boundary meets lies
+  //    inside one phase, so its vertices take that phase without asking the oracle per vertex.
+  void register_nodes() {
+    nodes_.registry = grid::KeyMap(forest_.size() / 2 + 16);
+    nodes_.tet_nodes.resize(forest_.size());
+    const PhaseMask matrix_bit = PhaseMask{1} << oracle_.matrix_phase();
+    for (std::int32_t t = 0; t < static_cast<std::int32_t>(forest_.size()); ++t) {
+      if (!forest_.is_leaf(t)) continue;
+      const auto v = forest_.fine_vertices(t);
+      auto& ids = nodes_.tet_nodes[static_cast<std::size_t>(t)];
+      for (int i = 0; i < 4; ++i) ids[static_cast<std::size_t>(i)] = add_node(v[i]);
+      const auto candidates = g_.candidates_of_tet(t);
+      if (g_.is_cut(t)) {
+        for (std::int32_t id : ids)
+          if (nodes_.mask[static_cast<std::size_t>(id)] == 0)
+            nodes_.mask[static_cast<std::size_t>(id)] =
+                oracle_.closure_phases(nodes_.position[static_cast<std::size_t>(id)], candidates);
+      } else {
+        PhaseMask bit = matrix_bit;
+        if (!candidates.empty()) {
+          Vec3 centre{0, 0, 0};
+          for (std::int32_t id : ids)
+            for (int d = 0; d < 3; ++d) centre[d] += 0.25 * nodes_.position[static_cast<std::size_t>(id)][d];
+          bit = PhaseMask{1} << oracle_.phase_at(centre, candidates);
+        }
+        for (std::int32_t id : ids)
+          if (nodes_.mask[static_cast<std::size_t>(id)] == 0) nodes_.mask[static_cast<std::size_t>(id)] = bit;
+      }
+    }
+    nodes_.state.assign(node_count(), NodeState::stayed);
+  }
+
+  std::int32_t add_node(const LatticePoint3& p) {
+    bool inserted = false;
+    const auto next = static_cast<std::int32_t>(nodes_.key.size());
+    const LatticeKey3 k = grid::key3(p);
+    const std::int32_t id = nodes_.registry.insert(k, next, inserted);
+    if (inserted) {
+      nodes_.key.push_back(k);
+      nodes_.position.push_back(forest_.position(p));
+      nodes_.mask.push_back(0);
+      point_.push_back(p);
+    }
+    return id;
+  }
+
+  // 2. The phase-changing edges of cut leaves (disjoint closure masks at the ends): the
+  //    crossings of each, once, on the segment oriented from the smaller key.
+  void find_edges() {
+    nodes_.cut_leaf_slot.assign(forest_.size(), -1);
+    EdgeIndex& index = nodes_.edge_index;
+    for (std::int32_t t = 0; t < static_cast<std::int32_t>(forest_.size()); ++t) {
+      if (!forest_.is_leaf(t) || !g_.is_cut(t)) continue;
+      const auto& ids = nodes_.tet_nodes[static_cast<std::size_t>(t)];
+      std::array<std::int32_t, 6> slots{-1, -1, -1, -1, -1, -1};
+      bool any = false;
+      for (int e = 0; e < 6; ++e) {
+        std::int32_t a = ids[tet::kEdges[e][0]], b = ids[tet::kEdges[e][1]];
+        if (nodes_.mask[static_cast<std::size_t>(a)] & nodes_.mask[static_cast<std::size_t>(b)]) continue;
+        if (nodes_.key[static_cast<std::size_t>(b)] < nodes_.key[static_cast<std::size_t>(a)]) std::swap(a, b);
+        const std::pair<LatticeKey3, LatticeKey3> k{nodes_.key[static_cast<std::size_t>(a)],
+                                                     nodes_.key[static_cast<std::size_t>(b)]};
+        auto [it, inserted] = index.try_emplace(k, static_cast<std::int32_t>(nodes_.edges.size()));
+        if (inserted) add_edge(a, b, t);
+        slots[static_cast<std::size_t>(e)] = it->second;
+        any = true;
+      }
+      if (!any) continue;
+      nodes_.cut_leaf_slot[static_cast<std::size_t>(t)] = static_cast<std::int32_t>(nodes_.leaf_edges.size());
+      nodes_.leaf_edges.push_back(slots);
+    }
+  }
+
+  void add_edge(std::int32_t lo, std::int32_t hi, std::int32_t leaf) {
+    const Vec3& pa = nodes_.position[static_cast<std::size_t>(lo)];
+    const Vec3& pb = nodes_.position[static_cast<std::size_t>(hi)];
+    const LatticePoint3& qa = point_[static_cast<std::size_t>(lo)];
+    const LatticePoint3& qb = point_[static_cast<std::size_t>(hi)];
+    oracle_.crossings(pa, pb, g_.candidates_of_tet(leaf), crossings_);
+    EdgeCut cut;
+    cut.lo = nodes_.key[static_cast<std::size_t>(lo)];
+    cut.hi = nodes_.key[static_cast<std::size_t>(hi)];
+    EdgeEnds ends;
+    int differing = 0;
+    for (int d = 0; d < 3; ++d) differing += qa[d] != qb[d] ? 1 : 0;
+    ends.axis = differing == 1;
+    ends.length = mesh::distance<3>(pa, pb);
+    const PhaseMask ma = nodes_.mask[static_cast<std::size_t>(lo)], mb = nodes_.mask[static_cast<std::size_t>(hi)];
+    const geometry::Crossing* chosen = nullptr;
+    for (const auto& c : crossings_)
+      if ((ma & (PhaseMask{1} << c.from_phase)) && (mb & (PhaseMask{1} << c.to_phase))) {
+        chosen = &c;
+        break;
+      }
+    if (chosen == nullptr && !crossings_.empty()) {
+      // No crossing goes straight from one end's phase to the other's: a third phase lies
+      // in between, thinner than the edge (a gap at a contact). Its first crossing stands
+      // for the interface, a collapse of that gap, off the far phase by at most the
+      // distance to the crossing that enters it.
+      chosen = &crossings_.front();
+      double enter = 1.0;
+      for (const auto& c : crossings_)
+        if (mb & (PhaseMask{1} << c.to_phase)) {
+          enter = c.t;
+          break;
+        }
+      ++nodes_.collapsed_cut_points;
+      nodes_.max_collapse_deviation =
+          std::max(nodes_.max_collapse_deviation, (enter - chosen->t) * mesh::distance<3>(pa, pb));
+    }
+    if (chosen != nullptr) {
+      for (int d = 0; d < 3; ++d) cut.point[d] = pa[d] + chosen->t * (pb[d] - pa[d]);
+      cut.mask = (PhaseMask{1} << chosen->from_phase) | (PhaseMask{1} << chosen->to_phase);
+      cut.found = true;
+      ends.any = true;
+      const auto& f = crossings_.front();
+      const auto& l = crossings_.back();
+      ends.t_front = f.t, ends.mask_front = (PhaseMask{1} << f.from_phase) | (PhaseMask{1} << f.to_phase);
+      ends.t_back = l.t, ends.mask_back = (PhaseMask{1} << l.from_phase) | (PhaseMask{1} << l.to_phase);
+    } else {
+      for (int d = 0; d < 3; ++d) cut.point[d] = 0.5 * (pa[d] + pb[d]);
+      cut.mask = ma | mb;
+      ++nodes_.missing_crossings;
+    }
+    nodes_.edges.push_back(cut);
+    ends_.push_back(ends);
+  }
+
+  // A node on the domain boundary may only move within it: along an edge that keeps every
+  // boundary coordinate of the node. Domain corners never move.
+  bool slides_within_domain(const LatticePoint3& pv, const LatticePoint3& pw) const {
+    for (int d = 0; d < 3; ++d) {
+      const std::int64_t top = grid::fine_extent(lattice_, d);
+      if ((pv[d] == 0 || pv[d] == top) && pw[d] != pv[d]) return false;
+    }
+    return true;
+  }
+
+  // 3. Options per node: snap candidates (nearest first, at most max_candidates), stay,
+  //    collapse. Refusal scores: a long snap is refused before a short one (its node then
+  //    takes its next option, usually harmless); staying next to a crossing (which would
+  //    leave a sliver in the split) is refused before any snap, since collapsing there moves
+  //    the interface by almost nothing; staying far from every crossing comes last.
+  void build_options() {
+    const std::size_t n = node_count();
+    collapse_mask_.assign(n, 0);
+    std::vector<double> nearest(n, std::numeric_limits<double>::infinity());
+    std::vector<Candidate> candidates;
+    for (std::size_t e = 0; e < nodes_.edges.size(); ++e) {
+      const EdgeCut& cut = nodes_.edges[e];
+      const EdgeEnds& ends = ends_[e];
+      const std::int32_t lo = nodes_.id(cut.lo), hi = nodes_.id(cut.hi);
+      for (int side = 0; side < 2; ++side) {
+        const std::int32_t v = side == 0 ? lo : hi, w = side == 0 ? hi : lo;
+        const auto uv = static_cast<std::size_t>(v), uw = static_cast<std::size_t>(w);
+        collapse_mask_[uv] |= nodes_.mask[uw];
+        {
+          const double to_crossing = ends.any ? (side == 0 ? ends.t_front : 1.0 - ends.t_back) * ends.length : ends.length;
+          const PhaseMask beyond = ends.any ? (side == 0 ? ends.mask_front : ends.mask_back) & ~nodes_.mask[uv] : 0;
+          for (PhaseMask rest = nodes_.mask[uw]; rest != 0; rest &= rest - 1) {
+            const int phase = std::countr_zero(rest);
+            const double d = (beyond >> phase) & 1 ? to_crossing : ends.length;
+            auto [it, inserted] = reach_.try_emplace(static_cast<std::uint64_t>(v) * 64 + static_cast<std::uint64_t>(phase), d);
+            if (!inserted) it->second = std::min(it->second, d);
+          }
+        }
+        if (!ends.any) continue;
+        const double fraction = side == 0 ? ends.t_front : 1.0 - ends.t_back;
+        nearest[uv] = std::min(nearest[uv], fraction);
+        if (single_phase(nodes_.mask[uv]) < 0) continue;  // already on an interface
+        if (fraction > (ends.axis ? options_.alpha : options_.alpha_diagonal)) continue;
+        if (!slides_within_domain(point_[uv], point_[uw])) continue;
+        Candidate c;
+        c.node = v;
+        c.fraction = fraction;
+        c.distance = fraction * ends.length;
+        c.other = nodes_.key[uw];
+        const Vec3 &pa = nodes_.position[static_cast<std::size_t>(lo)], &pb = nodes_.position[static_cast<std::size_t>(hi)];
+        const double t = side == 0 ? ends.t_front : ends.t_back;
+        for (int d = 0; d < 3; ++d) c.position[d] = pa[d] + t * (pb[d] - pa[d]);
+        c.mask = side == 0 ? ends.mask_front : ends.mask_back;
+        candidates.push_back(c);
+      }
+    }
+    std::sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) {
+      if (a.node != b.node) return a.node < b.node;
+      if (a.distance != b.distance) return a.distance < b.distance;
+      return a.other < b.other;
+    });
+    option_begin_.assign(n + 1, 0);
+    std::size_t c = 0;
+    for (std::size_t v = 0; v < n; ++v) {
+      option_begin_[v] = static_cast<std::int32_t>(option_.size());
+      int kept = 0;
+      for (; c < candidates.size() && candidates[c].node == static_cast<std::int32_t>(v); ++c) {
+        if (kept >= options_.max_candidates) continue;
+        ++kept;
+        option_.push_back({candidates[c].position, candidates[c].mask, 1.0 + candidates[c].fraction, OptionKind::snap});
+      }
+      if (collapse_mask_[v] == 0) continue;  // no phase change at this node
+      const double near = nearest[v];
+      option_.push_back({nodes_.position[v], nodes_.mask[v], near < 0.15 ? 2.0 - near : 0.5 - std::min(near, 1.0),
+                         OptionKind::stay});
+      option_.push_back({nodes_.position[v], nodes_.mask[v] | collapse_mask_[v], 0.0, OptionKind::collapse});
+    }
+    option_begin_[n] = static_cast<std::int32_t>(option_.size());
+    refused_.assign(option_.size(), 0);
+  }
+
+  // 4. The guard, leaf by leaf (see the header).
+  void guard() {
+    std::vector<std::int32_t> local_refused;
+    // Per vertex of the leaf: the options to enumerate; the last one is never refused.
+    std::array<std::array<std::int32_t, kMaxMenu>, 4> menu{};
+    std::array<int, 4> count{};
+    for (std::int32_t t = 0; t < static_cast<std::int32_t>(forest_.size()); ++t) {
+      if (!forest_.is_leaf(t)) continue;
+      const auto& ids = nodes_.tet_nodes[static_cast<std::size_t>(t)];
+      bool choice = false;
+      for (int i = 0; i < 4; ++i) choice = choice || option_count(ids[static_cast<std::size_t>(i)]) > 1;
+      if (!choice) continue;
+      ++nodes_.guarded_leaves;
+      // A leaf where some phase is in every option of every vertex is kept whole whatever
+      // happens: only positions matter, and staying or collapsing is the same position.
+      // Enumerate its snaps and one unmoved entry (the collapse, whose mask holds the
+      // stay's: if even it leaves the leaf in a void only, nothing is emitted).
+      PhaseMask always = ~PhaseMask{0};
+      for (int i = 0; i < 4; ++i) {
+        const std::int32_t v = ids[static_cast<std::size_t>(i)];
+        if (option_count(v) == 0) always &= nodes_.mask[static_cast<std::size_t>(v)];
+        for (std::int32_t o = option_begin_[static_cast<std::size_t>(v)]; o < option_begin_[static_cast<std::size_t>(v) + 1]; ++o)
+          always &= option_[static_cast<std::size_t>(o)].mask;
+      }
+      for (int i = 0; i < 4; ++i) {
+        const std::int32_t v = ids[static_cast<std::size_t>(i)];
+        auto& m = menu[static_cast<std::size_t>(i)];
+        int& n = count[static_cast<std::size_t>(i)];
+        n = 0;
+        const std::int32_t begin = option_begin_[static_cast<std::size_t>(v)], end = option_begin_[static_cast<std::size_t>(v) + 1];
+        if (begin == end) {
+          m[static_cast<std::size_t>(n++)] = -1;
+          continue;
+        }
+        for (std::int32_t o = begin; o < end; ++o) {
+          if (always != 0 && o + 1 < end && option_[static_cast<std::size_t>(o)].kind != OptionKind::snap) continue;
+          m[static_cast<std::size_t>(n++)] = o;
+        }
+      }
+      local_refused.clear();
+      std::array<int, 4> at{0, 0, 0, 0};
+      std::array<std::int32_t, 4> chosen{};
+      while (true) {
+        bool skip = false;
+        for (int i = 0; i < 4; ++i) {
+          const std::int32_t o = menu[static_cast<std::size_t>(i)][static_cast<std::size_t>(at[static_cast<std::size_t>(i)])];
+          chosen[static_cast<std::size_t>(i)] = o;
+          if (o >= 0 && std::find(local_refused.begin(), local_refused.end(), o) != local_refused.end()) skip = true;
+        }
+        if (!skip) {
+          ++nodes_.combinations;
+          if (!acceptable(t, chosen)) {
+            // Refuse the deepest fallback first (a combination happens only if every
+            // earlier option of its vertices was refused), then by score. Depth counts the
+            // earlier options this leaf has not refused itself: once it refused a node's
+            // first option, that node's next one is what the leaf expects to happen.
+            std::int32_t pick = -1;
+            int pick_rank = -1;
+            for (int i = 0; i < 4; ++i) {
+              const std::int32_t o = chosen[static_cast<std::size_t>(i)];
+              if (o < 0 || at[static_cast<std::size_t>(i)] + 1 == count[static_cast<std::size_t>(i)]) continue;
+              int rank = 0;
+              for (int j = 0; j < at[static_cast<std::size_t>(i)]; ++j) {
+                const std::int32_t earlier = menu[static_cast<std::size_t>(i)][static_cast<std::size_t>(j)];
+                if (std::find(local_refused.begin(), local_refused.end(), earlier) == local_refused.end()) ++rank;
+              }
+              if (pick < 0 || rank > pick_rank ||
+                  (rank == pick_rank && option_[static_cast<std::size_t>(o)].score > option_[static_cast<std::size_t>(pick)].score))
+                pick = o, pick_rank = rank;
+            }
+            // No refusable option: every vertex at its last option, which keeps the leaf
+            // whole and undeformed; only a leaf no two phases can split ends here.
+            if (pick >= 0) {
+              local_refused.push_back(pick);
+              refused_[static_cast<std::size_t>(pick)] = 1;
+            }
+          }
+        }
+        int i = 0;
+        for (; i < 4; ++i) {
+          if (++at[static_cast<std::size_t>(i)] < count[static_cast<std::size_t>(i)]) break;
+          at[static_cast<std::size_t>(i)] = 0;
+        }
+        if (i == 4) break;
+      }
+    }
+  }
+
+  bool is_void(int phase) const { return oracle_.scene().phases[static_cast<std::size_t>(phase)].is_void; }
+
+  // Would the leaf, with its vertices at these options (-1: the node has none, it stays),
+  // emit only positive tetrahedra within the bound, and could it be split?
+  bool acceptable(std::int32_t t, const std::array<std::int32_t, 4>& chosen) const {
+    const auto& ids = nodes_.tet_nodes[static_cast<std::size_t>(t)];
+    std::array<Vec3, 4> pos{};
+    std::array<PhaseMask, 4> mask{};
+    std::array<grid::stencil3::PointId, 4> id{};
+    std::array<LatticePoint3, 4> lattice{};
+    for (int i = 0; i < 4; ++i) {
+      const auto k = static_cast<std::size_t>(i);
+      const std::int32_t o = chosen[k];
+      const auto v = static_cast<std::size_t>(ids[k]);
+      pos[k] = o < 0 ? nodes_.position[v] : option_[static_cast<std::size_t>(o)].position;
+      mask[k] = o < 0 ? nodes_.mask[v] : option_[static_cast<std::size_t>(o)].mask;
+      id[k] = {nodes_.key[v], nodes_.key[v]};
+      lattice[k] = point_[v];
+    }
+    // A strictly cut edge has both ends staying strictly inside different phases: it is
+    // a phase-changing edge of this (cut) leaf, with its cut point in the table.
+    const auto* edges = nodes_.edges_of(t);
+    const auto o = grid::stencil3::outcome(lattice, pos, mask, id, [&](int e, Vec3& point, grid::stencil3::PointId& pid) {
+      const std::int32_t ei = edges == nullptr ? -1 : (*edges)[static_cast<std::size_t>(e)];
+      if (ei < 0) return false;
+      const EdgeCut& cut = nodes_.edges[static_cast<std::size_t>(ei)];
+      point = cut.point, pid = {cut.lo, cut.hi};
+      return true;
+    });
+    return acceptable(o);
+  }
+
+  bool acceptable(const grid::stencil3::Outcome& o) const {
+    using Kind = grid::stencil3::Outcome::Kind;
+    if (o.kind == Kind::unsplittable) return false;
+    if (o.kind == Kind::kept) {
+      if (std::popcount(o.common) == 1 && is_void(std::countr_zero(o.common))) return true;
+      return good(o.p[0], o.p[1], o.p[2], o.p[3]);
+    }
+    for (int k = 0; k < o.split.count; ++k) {
+      if (is_void(o.phase_of(k))) continue;
+      const auto& s = o.split.tet[static_cast<std::size_t>(k)];
+      if (!good(o.p[s[0]], o.p[s[1]], o.p[s[2]], o.p[s[3]])) return false;
+    }
+    return true;
+  }
+
+  bool good(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) const {
+    return mesh::positive_within(a, b, c, d, options_.bound);
+  }
+
+  // 5. Every node takes its first option no leaf refused (its last one is never refused).
+  void apply() {
+    const std::size_t n = node_count();
+    std::vector<std::int32_t> candidates;
+    for (std::size_t v = 0; v < n; ++v) {
+      const std::int32_t begin = option_begin_[v], end = option_begin_[v + 1];
+      if (begin == end) continue;
+      std::int32_t o = begin;
+      while (o + 1 < end && refused_[static_cast<std::size_t>(o)]) ++o;
+      if (o > begin) ++nodes_.refused_count;
+      const Option& option = option_[static_cast<std::size_t>(o)];
+      switch (option.kind) {
+        case OptionKind::snap:
+          nodes_.position[v] = option.position;
+          nodes_.mask[v] = option.mask;
+          nodes_.state[v] = NodeState::snapped;
+          ++nodes_.snapped_count;
+          break;
+        case OptionKind::stay: break;
+        case OptionKind::collapse: {
+          const PhaseMask added = option.mask & ~nodes_.mask[v];
+          for (PhaseMask rest = added; rest != 0; rest &= rest - 1) {
+            const int phase = std::countr_zero(rest);
+            double d = oracle_.distance_to_phase(nodes_.position[v], phase);
+            if (const auto it = reach_.find(static_cast<std::uint64_t>(v) * 64 + static_cast<std::uint64_t>(phase)); it != reach_.end())
+              d = std::min(d, it->second);
+            nodes_.max_collapse_deviation = std::max(nodes_.max_collapse_deviation, d);
+          }
+          nodes_.mask[v] = option.mask;
+          nodes_.state[v] = NodeState::collapsed;
+          ++nodes_.collapsed_count;
+          break;
+        }
+      }
+    }
+  }
+};
 
 }  // namespace
 
 Nodes3 snap3(const geometry::Oracle3& oracle, const samr::RefinedGrid3& g, const Options3& options) {
-  const grid::TetForest& forest = g.forest;
-  const grid::Lattice3& lattice = forest.lattice();
-  Nodes3 nodes;
-  nodes.registry = grid::KeyMap(forest.size() / 2 + 16);
-  nodes.tet_nodes.resize(forest.size());
-
-  const auto add_node = [&](const grid::LatticePoint3& p) -> std::int32_t {
-    bool inserted = false;
-    const auto next = static_cast<std::int32_t>(nodes.key.size());
-    const grid::LatticeKey3 k = grid::key3(p);
-    const std::int32_t id = nodes.registry.insert(k, next, inserted);
-    if (inserted) {
-      nodes.key.push_back(k);
-      nodes.position.push_back(forest.position(p));
-      nodes.mask.push_back(0);
-    }
-    return id;
-  };
-
-  // 1. Vertices of every leaf and their phases. A leaf that no boundary meets lies inside
-  //    one phase, so its vertices take that phase without asking the oracle per vertex.
-  const PhaseMask matrix_bit = PhaseMask{1} << oracle.matrix_phase();
-  for (std::int32_t t = 0; t < static_cast<std::int32_t>(forest.size()); ++t) {
-    if (!forest.is_leaf(t)) continue;
-    const auto v = forest.fine_vertices(t);
-    auto& ids = nodes.tet_nodes[static_cast<std::size_t>(t)];
-    for (int i = 0; i < 4; ++i) ids[static_cast<std::size_t>(i)] = add_node(v[i]);
-    const auto candidates = g.candidates_of_tet(t);
-    if (g.is_cut(t)) {
-      for (std::int32_t id : ids)
-        if (nodes.mask[static_cast<std::size_t>(id)] == 0)
-          nodes.mask[static_cast<std::size_t>(id)] =
-              oracle.closure_phases(nodes.position[static_cast<std::size_t>(id)], candidates);
-    } else {
-      PhaseMask bit = matrix_bit;
-      if (!candidates.empty()) {
-        Vec3 centre{0, 0, 0};
-        for (std::int32_t id : ids)
-          for (int d = 0; d < 3; ++d) centre[d] += 0.25 * nodes.position[static_cast<std::size_t>(id)][d];
-        bit = PhaseMask{1} << oracle.phase_at(centre, candidates);
-      }
-      for (std::int32_t id : ids)
-        if (nodes.mask[static_cast<std::size_t>(id)] == 0) nodes.mask[static_cast<std::size_t>(id)] = bit;
-    }
-  }
-  const std::size_t n = nodes.key.size();
-  nodes.snapped.assign(n, 0);
-
-  // 2. Snap decisions, from original positions and masks only.
-  struct Snap {
-    std::int32_t node;
-    Vec3 position;
-    PhaseMask mask;
-  };
-  std::vector<std::int64_t> fine_max(3);
-  for (int d = 0; d < 3; ++d) fine_max[static_cast<std::size_t>(d)] = grid::fine_extent(lattice, d);
-  std::vector<std::uint8_t> visited(n, 0);
-  std::vector<Snap> snaps;
-  std::vector<geometry::Crossing> crossings;
-  const auto& range = forest.range();
-
-  // The crossing of edge v→w nearest v, in units of the edge length, or +inf. The
-  // segment is oriented from the smaller key so both ends get the same doubles.
-  const auto nearest_crossing = [&](const grid::LatticePoint3& pv, const grid::LatticePoint3& pw, std::int32_t v,
-                                    std::int32_t w, Snap& out) -> double {
-    const bool v_first = nodes.key[static_cast<std::size_t>(v)] < nodes.key[static_cast<std::size_t>(w)];
-    const std::int32_t a = v_first ? v : w, b = v_first ? w : v;
-    const Vec3 pa = nodes.position[static_cast<std::size_t>(a)], pb = nodes.position[static_cast<std::size_t>(b)];
-    // The coarse cube holding the segment (it never crosses a coarse cube face).
-    std::int64_t c[3];
-    const std::int64_t coarse_units = lattice.units(0);
-    for (int d = 0; d < 3; ++d)
-      c[d] = std::min((pv[d] + pw[d]) / 2 / coarse_units, range.hi[d] - 1);
-    const std::int64_t cube = g.cube_index(c[0], c[1], c[2]);
-    if (cube < 0) return std::numeric_limits<double>::infinity();
-    oracle.crossings(pa, pb, g.candidates_of_cube(cube), crossings);
-    if (crossings.empty()) return std::numeric_limits<double>::infinity();
-    const geometry::Crossing& cross = v_first ? crossings.front() : crossings.back();
-    for (int d = 0; d < 3; ++d) out.position[d] = pa[d] + cross.t * (pb[d] - pa[d]);
-    out.mask = (PhaseMask{1} << cross.from_phase) | (PhaseMask{1} << cross.to_phase);
-    // A crossing exactly half-way belongs to the endpoint with the smaller key.
-    const double dist = v_first ? cross.t : 1.0 - cross.t;
-    return (dist == options.alpha && !v_first) ? std::nextafter(dist, 1.0) : dist;
-  };
-
-  static constexpr int kDirections[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
-  for (std::int32_t t = 0; t < static_cast<std::int32_t>(forest.size()); ++t) {
-    if (!forest.is_leaf(t) || !g.is_cut(t)) continue;
-    // Rule R4: every leaf around a vertex of a cut leaf has this leaf's level, so the
-    // six axis edges of the vertex have length h_l.
-    const std::int64_t s = lattice.units(forest.tet(t).level);
-    const auto verts = forest.fine_vertices(t);
-    for (int i = 0; i < 4; ++i) {
-      const std::int32_t v = nodes.tet_nodes[static_cast<std::size_t>(t)][static_cast<std::size_t>(i)];
-      if (visited[static_cast<std::size_t>(v)]) continue;
-      visited[static_cast<std::size_t>(v)] = 1;
-      const int phase = single_phase(nodes.mask[static_cast<std::size_t>(v)]);
-      if (phase < 0) continue;  // already on an interface
-      const grid::LatticePoint3& pv = verts[i];
-      double best = std::numeric_limits<double>::infinity();
-      Snap snap{v, {}, 0}, candidate{v, {}, 0};
-      for (const auto& dir : kDirections) {
-        const int axis = dir[0] != 0 ? 0 : dir[1] != 0 ? 1 : 2;
-        // On the domain boundary a node may only slide along it.
-        if (pv[axis] == 0 || pv[axis] == fine_max[static_cast<std::size_t>(axis)]) continue;
-        const grid::LatticePoint3 pw{pv[0] + dir[0] * s, pv[1] + dir[1] * s, pv[2] + dir[2] * s};
-        const std::int32_t w = nodes.id(grid::key3(pw));
-        if (w < 0) continue;  // beyond the range
-        if (nodes.mask[static_cast<std::size_t>(w)] & (PhaseMask{1} << phase)) continue;  // no phase change
-        const double distance = nearest_crossing(pv, pw, v, w, candidate);
-        if (distance <= options.alpha && distance < best) best = distance, snap = candidate;
-      }
-      if (snap.mask != 0) snaps.push_back(snap);
-    }
-  }
-  // 3. Apply all moves at once.
-  for (const Snap& s : snaps) {
-    nodes.position[static_cast<std::size_t>(s.node)] = s.position;
-    nodes.mask[static_cast<std::size_t>(s.node)] = s.mask;
-    nodes.snapped[static_cast<std::size_t>(s.node)] = 1;
-  }
-  nodes.snapped_count = static_cast<std::int64_t>(snaps.size());
-  return nodes;
+  if (options.max_candidates < 0 || options.max_candidates + 2 > kMaxMenu)
+    throw std::invalid_argument("snap3: max_candidates must lie in [0, " + std::to_string(kMaxMenu - 2) + "]");
+  return Snapper(oracle, g, options).run();
 }
 
 }  // namespace cisamr::radapt

@@ -1,11 +1,24 @@
 #pragma once
-// r-adaptivity in 3D: every node of a cut tet either stays or snaps onto the nearest
-// interface crossing along one of its six axis edges (the legs of the corner tets around
-// it), when that crossing is closer than alpha·(edge length). Decisions use original
-// positions only, so they are independent of visiting order and identical on every
-// partition that sees the node (lib/pipeline/README3.md).
+// r-adaptivity in 3D with a quality guard (lib/radapt/README3.md).
+//
+// Every node of a cut leaf gets an ordered list of options, decided from original positions
+// only: snap onto the nearest interface crossings along its leaf edges (axis edges within
+// alpha, face diagonals within alpha_diagonal of their length, nearest first), stay where
+// it is, and, last, *collapse*: stay but count as lying on the interface with the phases
+// of its neighbours across a phase change (a bounded, reported deviation from the true
+// interface). Every leaf then enumerates the combinations of its vertices' options, splits
+// each as subdivide3 would (grid/cut_stencil3.hpp), and for each combination that would emit
+// a tetrahedron above `bound` (or an inverted one, or a leaf it cannot split) refuses one
+// option used in it. A node ends at its first option no leaf refused. Each leaf decides from
+// its own data, so the result does not depend on any visiting order and is the same on every
+// partition that sees the leaf; the combination that happens in a leaf is one the leaf
+// checked, so no emitted tetrahedron exceeds `bound`. The last options of all vertices (all
+// staying, collapsed where they touch a phase change) keep the leaf whole and undeformed, so
+// every bad combination holds an option that can be refused.
 #include <array>
 #include <cstdint>
+#include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include "core/types.hpp"
@@ -17,26 +30,77 @@
 namespace cisamr::radapt {
 
 struct Options3 {
-  double alpha = 0.5;  // snap threshold, fraction of the edge length
+  double alpha = 0.5;           // snap reach along axis edges, fraction of the edge length
+  double alpha_diagonal = 0.2;  // along face diagonals (0: axis edges only, as in the paper)
+  int max_candidates = 2;       // snap candidates kept per node (nearest first), at most 6
+  double bound = 5.0;           // the guard's aspect-ratio bound; 0 disables the guard
 };
 
-// The nodes of the refined forest: lattice keys, positions after snapping and the phases
-// whose closure holds each node (one bit inside a phase, two or more on an interface).
+// How a node ended.
+enum class NodeState : std::uint8_t { stayed = 0, snapped = 1, collapsed = 2 };
+
+// A phase-changing edge of a cut leaf (its ends' closure masks are disjoint) and the point
+// where the interface between its ends' phases crosses it, computed on the original segment
+// oriented from the smaller key (the same doubles on every partition).
+struct EdgeCut {
+  grid::LatticeKey3 lo = 0, hi = 0;
+  Vec3 point{};
+  PhaseMask mask = 0;  // the two phases of the crossing
+  bool found = false;  // false: the oracle saw no crossing (point = midpoint)
+};
+
+struct KeyPairHash {
+  std::size_t operator()(const std::pair<grid::LatticeKey3, grid::LatticeKey3>& p) const {
+    std::uint64_t h = p.first * 0x9e3779b97f4a7c15ULL;
+    h ^= p.second + 0x7f4a7c159e3779b9ULL + (h << 6) + (h >> 2);
+    h ^= h >> 31;
+    return static_cast<std::size_t>(h * 0xff51afd7ed558ccdULL);
+  }
+};
+using EdgeIndex = std::unordered_map<std::pair<grid::LatticeKey3, grid::LatticeKey3>, std::int32_t, KeyPairHash>;
+
+// The nodes of the refined forest: lattice keys, final positions and closure masks (one
+// bit inside a phase, two or more on an interface, or for a collapsed node).
 struct Nodes3 {
   std::vector<grid::LatticeKey3> key;
   std::vector<Vec3> position;
   std::vector<PhaseMask> mask;
-  std::vector<std::uint8_t> snapped;  // 1 if moved onto an interface
-  std::int64_t snapped_count = 0;
+  std::vector<NodeState> state;
   // Node ids of each leaf's vertices (fine_vertices order), indexed by forest tet;
   // unspecified for non-leaves.
   std::vector<std::array<std::int32_t, 4>> tet_nodes;
   grid::KeyMap registry{1024};
 
+  // Phase-changing edges of cut leaves, and per cut leaf its six edges' indices into
+  // `edges` (-1: no phase change). `cut_leaf_slot[t]` indexes `leaf_edges` (-1: not cut).
+  std::vector<EdgeCut> edges;
+  EdgeIndex edge_index;  // (lo, hi) → index into `edges`
+  std::vector<std::int32_t> cut_leaf_slot;
+  std::vector<std::array<std::int32_t, 6>> leaf_edges;
+
+  std::int64_t snapped_count = 0;
+  std::int64_t collapsed_count = 0;      // nodes that ended collapsed
+  std::int64_t collapsed_cut_points = 0; // cut points standing for a gap thinner than their edge
+  std::int64_t refused_count = 0;        // nodes that did not get their first option
+  std::int64_t missing_crossings = 0;    // phase-changing edges without an oracle crossing
+  std::int64_t guarded_leaves = 0;       // leaves whose option combinations were checked
+  std::int64_t combinations = 0;         // combinations checked
+  double max_collapse_deviation = 0;     // largest distance of a collapsed node (or cut point) from a phase it serves
+
   std::int32_t id(grid::LatticeKey3 k) const { return registry.find(k); }
+  // The phase-changing edge between two lattice keys (either order), or -1.
+  std::int32_t edge(grid::LatticeKey3 a, grid::LatticeKey3 b) const {
+    const auto it = edge_index.find(a < b ? std::pair{a, b} : std::pair{b, a});
+    return it == edge_index.end() ? -1 : it->second;
+  }
+  bool moved(std::int32_t n) const { return state[static_cast<std::size_t>(n)] == NodeState::snapped; }
+  const std::array<std::int32_t, 6>* edges_of(std::int32_t t) const {
+    const std::int32_t slot = cut_leaf_slot[static_cast<std::size_t>(t)];
+    return slot < 0 ? nullptr : &leaf_edges[static_cast<std::size_t>(slot)];
+  }
 };
 
-// Registers the vertices of every leaf, classifies them and snaps nodes of cut tets.
+// Registers the vertices of every leaf, classifies them and decides every node's fate.
 Nodes3 snap3(const geometry::Oracle3& oracle, const samr::RefinedGrid3& grid, const Options3& options);
 
 }  // namespace cisamr::radapt

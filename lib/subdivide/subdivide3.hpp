@@ -5,14 +5,15 @@
 //     by the optimal case tables of templates3.hpp;
 //   - a leaf whose vertices share a phase is kept;
 //   - a cut leaf (two vertices strictly in different phases) is split along the
-//     interface: cut nodes on its edges with a strict phase change, keyed by the edge's
-//     two lattice keys and computed on the segment oriented from the smaller key; quads
-//     split along the diagonal through their smallest point identity (key rule), so
-//     neighbours agree without communication.
+//     interface by grid/cut_stencil3.hpp, with the cut points radapt computed (keyed by
+//     the edge's two lattice keys, on the segment oriented from the smaller key), exactly
+//     as the snapping guard evaluated it; face quads split by the key rule, so neighbours
+//     agree without communication.
 #include <array>
 #include <cstdint>
 #include <vector>
 
+#include "faceswap/faceswap3.hpp"
 #include "geometry/oracle3.hpp"
 #include "grid/lattice.hpp"
 #include "radapt/radapt3.hpp"
@@ -35,15 +36,15 @@ struct Tets3 {
   std::int64_t steiner_points = 0;      // interior points of those closures
   std::int64_t unresolved = 0;          // cut leaves with more than two phases (kept whole)
   std::int64_t inverted = 0;            // output tets with non-positive volume
-  std::int64_t missing_crossings = 0;   // cut edges where the oracle found no crossing
   // Worst aspect ratio of the output tets by origin: closures of hanging midpoints, leaves
-  // kept whole (maybe deformed by snapping), sub-tets of cut leaves.
-  double worst_closure = 0, worst_kept = 0, worst_split = 0;
+  // kept whole (maybe deformed by snapping), sub-tets of cut leaves, tets of swapped cubes.
+  double worst_closure = 0, worst_kept = 0, worst_split = 0, worst_swapped = 0;
   std::int64_t kept_above_5 = 0, split_above_5 = 0;
 };
 
-// Tetrahedralises the leaves whose coarse cube lies in `owned` (the partition box).
+// Tetrahedralises the leaves whose coarse cube lies in `owned` (the partition box); cubes
+// that `swaps` re-tetrahedralised give their new tets instead of their leaves.
 Tets3 subdivide3(const geometry::Oracle3& oracle, const samr::RefinedGrid3& grid, const radapt::Nodes3& nodes,
-                 const grid::CellRange<3>& owned);
+                 const grid::CellRange<3>& owned, const faceswap::Swaps3* swaps = nullptr);
 
 }  // namespace cisamr::subdivide

@@ -1,10 +1,13 @@
 // End-to-end tests of the `cisamr` command: exit codes, error messages naming the file and
 // the field, and no output file left behind on failure (DESIGN.md §6).
 #include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
 #include <sys/wait.h>
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <cstdio>
 #include <filesystem>
@@ -150,23 +153,42 @@ TEST_F(Cli, MeshesEveryFormatAndCertifies) {
 
 // 3D: the first version of the mesher runs from the command line; it is conforming, and
 // the exit status reports tetrahedra above the bound of 5 (3) until face swapping lands.
-TEST_F(Cli, Meshes3DScenesAndReportsTheBound) {
-  const std::string scene = std::string(CISAMR_SOURCE_DIR) + "/data/examples/spheres3d.json";
-  const std::string out = (dir / "s3.vtu").string();
-  const CommandResult r = run("mesh " + scene + " -o " + out + " --report " + (dir / "s3.report").string());
-  EXPECT_TRUE(r.exit_code == 0 || r.exit_code == 3) << r.output;
-  ASSERT_TRUE(fs::exists(out));
-  EXPECT_NE(r.output.find("tetrahedra"), std::string::npos) << r.output;
-  std::ifstream report(dir / "s3.report");
-  const std::string text((std::istreambuf_iterator<char>(report)), std::istreambuf_iterator<char>());
-  EXPECT_NE(text.find("\"dimension\": 3"), std::string::npos) << text;
-  // Conformity of the written file, independently of the aspect ratio.
-  const CommandResult c = run("certify " + out + " --bound 1000");
-  EXPECT_EQ(c.exit_code, 0) << c.output;
-  // The parallel mesher is 2D only: a clear error, no output.
-  const CommandResult p = run("mesh " + scene + " -o " + (dir / "p.vtu").string() + " --partitions 2");
-  EXPECT_EQ(p.exit_code, 2) << p.output;
-  EXPECT_FALSE(fs::exists(dir / "p.pvtu"));
+// The shipped 3D examples (spheres, an ellipsoid and a fibre; STL shapes): every
+// tetrahedron within the bound (exit 0), a report with the guard's figures, a file that
+// certify passes with the scene (fidelity within the reported collapse deviation), and the
+// same mesh (checksum) from the parallel mesher on one process with two partitions.
+TEST_F(Cli, Meshes3DScenesWithinTheBound) {
+  for (const std::string name : {"spheres3d", "stl3d"}) {
+    SCOPED_TRACE(name);
+    const std::string scene = std::string(CISAMR_SOURCE_DIR) + "/data/examples/" + name + ".json";
+    const std::string out = (dir / (name + ".vtu")).string();
+    const fs::path report = dir / (name + ".report.json");
+    const CommandResult r = run("mesh " + scene + " -o " + out + " --report " + report.string());
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    ASSERT_TRUE(fs::exists(out));
+    EXPECT_NE(r.output.find("tetrahedra"), std::string::npos) << r.output;
+    std::ifstream in(report);
+    const auto j = nlohmann::json::parse(in);
+    EXPECT_EQ(j["dimension"], 3);
+    EXPECT_LE(j["aspect_ratio"]["max"].get<double>(), 5.0);
+    EXPECT_EQ(j["aspect_ratio"]["above_bound"], 0);
+    EXPECT_GT(j["algorithm"]["face_swaps"].get<long long>(), 0);
+    EXPECT_GT(j["phases"].size(), 1u);
+    const double deviation = j["algorithm"]["max_collapse_deviation"].get<double>();
+    char tolerance[64];
+    std::snprintf(tolerance, sizeof tolerance, "%.17g", std::max(1e-7, deviation * (1 + 1e-6)));
+    const CommandResult c = run("certify " + out + " --scene " + scene + " --fidelity-tolerance " + tolerance);
+    EXPECT_EQ(c.exit_code, 0) << c.output;
+    // The parallel mesher, one process, two partitions: the same elements.
+    const fs::path preport = dir / (name + ".p.json");
+    const CommandResult p = run("mesh " + scene + " -o " + (dir / (name + ".p.vtu")).string() + " --partitions 2 --report " +
+                                preport.string());
+    EXPECT_EQ(p.exit_code, 0) << p.output;
+    std::ifstream pin(preport);
+    const auto pj = nlohmann::json::parse(pin);
+    EXPECT_EQ(pj["checksum"], j["checksum"]);
+    EXPECT_EQ(pj["elements"], j["elements"]);
+  }
 }
 
 }  // namespace
