@@ -299,77 +299,113 @@ class Snapper {
   }
 
   // 4. The guard, leaf by leaf (see the header).
+  // Per vertex of a leaf: the options to enumerate (the last one is never refused), -1 for
+  // a node without options. False when no vertex has a choice.
+  using Menu = std::array<std::array<std::int32_t, kMaxMenu>, 4>;
+  bool build_menu(std::int32_t t, Menu& menu, std::array<int, 4>& count) const {
+    const auto& ids = nodes_.tet_nodes[static_cast<std::size_t>(t)];
+    bool choice = false;
+    for (int i = 0; i < 4; ++i) choice = choice || option_count(ids[static_cast<std::size_t>(i)]) > 1;
+    if (!choice) return false;
+    // A leaf where some phase is in every option of every vertex is kept whole whatever
+    // happens: only positions matter, and staying or collapsing is the same position.
+    // Enumerate its snaps and one unmoved entry (the collapse, whose mask holds the stay's:
+    // if even it leaves the leaf in a void only, nothing is emitted).
+    PhaseMask always = ~PhaseMask{0};
+    for (int i = 0; i < 4; ++i) {
+      const std::int32_t v = ids[static_cast<std::size_t>(i)];
+      if (option_count(v) == 0) always &= nodes_.mask[static_cast<std::size_t>(v)];
+      for (std::int32_t o = option_begin_[static_cast<std::size_t>(v)]; o < option_begin_[static_cast<std::size_t>(v) + 1]; ++o)
+        always &= option_[static_cast<std::size_t>(o)].mask;
+    }
+    for (int i = 0; i < 4; ++i) {
+      const std::int32_t v = ids[static_cast<std::size_t>(i)];
+      auto& m = menu[static_cast<std::size_t>(i)];
+      int& n = count[static_cast<std::size_t>(i)];
+      n = 0;
+      const std::int32_t begin = option_begin_[static_cast<std::size_t>(v)], end = option_begin_[static_cast<std::size_t>(v) + 1];
+      if (begin == end) {
+        m[static_cast<std::size_t>(n++)] = -1;
+        continue;
+      }
+      for (std::int32_t o = begin; o < end; ++o) {
+        if (always != 0 && o + 1 < end && option_[static_cast<std::size_t>(o)].kind != OptionKind::snap) continue;
+        m[static_cast<std::size_t>(n++)] = o;
+      }
+    }
+    return true;
+  }
+
+  // The option of a bad combination to refuse: the deepest fallback first (a combination
+  // happens only if every earlier option of its vertices was refused), then the highest
+  // score. Depth counts the earlier options not known to be refused (`gone`): once an
+  // option is refused, the node's next one is what is expected to happen. -1 when every
+  // vertex is at its last option.
+  template <class Gone>
+  std::int32_t pick_refusal(const Menu& menu, const std::array<int, 4>& count, const std::array<int, 4>& at,
+                            const std::array<std::int32_t, 4>& chosen, Gone&& gone) const {
+    std::int32_t pick = -1;
+    int pick_rank = -1;
+    for (int i = 0; i < 4; ++i) {
+      const std::int32_t o = chosen[static_cast<std::size_t>(i)];
+      if (o < 0 || at[static_cast<std::size_t>(i)] + 1 == count[static_cast<std::size_t>(i)]) continue;
+      int rank = 0;
+      for (int j = 0; j < at[static_cast<std::size_t>(i)]; ++j)
+        rank += gone(menu[static_cast<std::size_t>(i)][static_cast<std::size_t>(j)]) ? 0 : 1;
+      if (pick < 0 || rank > pick_rank ||
+          (rank == pick_rank && option_[static_cast<std::size_t>(o)].score > option_[static_cast<std::size_t>(pick)].score))
+        pick = o, pick_rank = rank;
+    }
+    return pick;
+  }
+
+  // The guard, in two passes over the leaves, each leaf deciding from its own data and
+  // what the previous pass decided (so order-free):
+  //  1. every leaf checks the combination of its vertices' first options, the one expected
+  //     to happen, and refuses one option if it is bad: refusals almost sure to be needed;
+  //  2. every leaf checks every combination of the options not refused in pass 1, refusing
+  //     (see pick_refusal) until none of them is bad.
+  // A node ends at its first option not refused; the combination that happens in a leaf
+  // avoids every refused option, so the leaf checked it in pass 2.
   void guard() {
-    std::vector<std::int32_t> local_refused;
-    // Per vertex of the leaf: the options to enumerate; the last one is never refused.
-    std::array<std::array<std::int32_t, kMaxMenu>, 4> menu{};
+    Menu menu{};
     std::array<int, 4> count{};
+    std::array<std::int32_t, 4> chosen{};
+    const std::array<int, 4> first{0, 0, 0, 0};
+    std::vector<std::uint8_t> likely(option_.size(), 0);  // pass 1's refusals
     for (std::int32_t t = 0; t < static_cast<std::int32_t>(forest_.size()); ++t) {
-      if (!forest_.is_leaf(t)) continue;
-      const auto& ids = nodes_.tet_nodes[static_cast<std::size_t>(t)];
-      bool choice = false;
-      for (int i = 0; i < 4; ++i) choice = choice || option_count(ids[static_cast<std::size_t>(i)]) > 1;
-      if (!choice) continue;
+      if (!forest_.is_leaf(t) || !build_menu(t, menu, count)) continue;
+      for (int i = 0; i < 4; ++i) chosen[static_cast<std::size_t>(i)] = menu[static_cast<std::size_t>(i)][0];
+      ++nodes_.combinations;
+      if (acceptable(t, chosen)) continue;
+      const std::int32_t pick = pick_refusal(menu, count, first, chosen, [](std::int32_t) { return false; });
+      if (pick >= 0) likely[static_cast<std::size_t>(pick)] = 1;
+    }
+    for (std::size_t o = 0; o < likely.size(); ++o) refused_[o] = likely[o];
+
+    std::vector<std::int32_t> local_refused;
+    for (std::int32_t t = 0; t < static_cast<std::int32_t>(forest_.size()); ++t) {
+      if (!forest_.is_leaf(t) || !build_menu(t, menu, count)) continue;
       ++nodes_.guarded_leaves;
-      // A leaf where some phase is in every option of every vertex is kept whole whatever
-      // happens: only positions matter, and staying or collapsing is the same position.
-      // Enumerate its snaps and one unmoved entry (the collapse, whose mask holds the
-      // stay's: if even it leaves the leaf in a void only, nothing is emitted).
-      PhaseMask always = ~PhaseMask{0};
-      for (int i = 0; i < 4; ++i) {
-        const std::int32_t v = ids[static_cast<std::size_t>(i)];
-        if (option_count(v) == 0) always &= nodes_.mask[static_cast<std::size_t>(v)];
-        for (std::int32_t o = option_begin_[static_cast<std::size_t>(v)]; o < option_begin_[static_cast<std::size_t>(v) + 1]; ++o)
-          always &= option_[static_cast<std::size_t>(o)].mask;
-      }
-      for (int i = 0; i < 4; ++i) {
-        const std::int32_t v = ids[static_cast<std::size_t>(i)];
-        auto& m = menu[static_cast<std::size_t>(i)];
-        int& n = count[static_cast<std::size_t>(i)];
-        n = 0;
-        const std::int32_t begin = option_begin_[static_cast<std::size_t>(v)], end = option_begin_[static_cast<std::size_t>(v) + 1];
-        if (begin == end) {
-          m[static_cast<std::size_t>(n++)] = -1;
-          continue;
-        }
-        for (std::int32_t o = begin; o < end; ++o) {
-          if (always != 0 && o + 1 < end && option_[static_cast<std::size_t>(o)].kind != OptionKind::snap) continue;
-          m[static_cast<std::size_t>(n++)] = o;
-        }
-      }
       local_refused.clear();
+      const auto gone = [&](std::int32_t o) {
+        return o >= 0 && (likely[static_cast<std::size_t>(o)] ||
+                          std::find(local_refused.begin(), local_refused.end(), o) != local_refused.end());
+      };
       std::array<int, 4> at{0, 0, 0, 0};
-      std::array<std::int32_t, 4> chosen{};
       while (true) {
         bool skip = false;
         for (int i = 0; i < 4; ++i) {
           const std::int32_t o = menu[static_cast<std::size_t>(i)][static_cast<std::size_t>(at[static_cast<std::size_t>(i)])];
           chosen[static_cast<std::size_t>(i)] = o;
-          if (o >= 0 && std::find(local_refused.begin(), local_refused.end(), o) != local_refused.end()) skip = true;
+          skip = skip || gone(o);
         }
         if (!skip) {
           ++nodes_.combinations;
           if (!acceptable(t, chosen)) {
-            // Refuse the deepest fallback first (a combination happens only if every
-            // earlier option of its vertices was refused), then by score. Depth counts the
-            // earlier options this leaf has not refused itself: once it refused a node's
-            // first option, that node's next one is what the leaf expects to happen.
-            std::int32_t pick = -1;
-            int pick_rank = -1;
-            for (int i = 0; i < 4; ++i) {
-              const std::int32_t o = chosen[static_cast<std::size_t>(i)];
-              if (o < 0 || at[static_cast<std::size_t>(i)] + 1 == count[static_cast<std::size_t>(i)]) continue;
-              int rank = 0;
-              for (int j = 0; j < at[static_cast<std::size_t>(i)]; ++j) {
-                const std::int32_t earlier = menu[static_cast<std::size_t>(i)][static_cast<std::size_t>(j)];
-                if (std::find(local_refused.begin(), local_refused.end(), earlier) == local_refused.end()) ++rank;
-              }
-              if (pick < 0 || rank > pick_rank ||
-                  (rank == pick_rank && option_[static_cast<std::size_t>(o)].score > option_[static_cast<std::size_t>(pick)].score))
-                pick = o, pick_rank = rank;
-            }
             // No refusable option: every vertex at its last option, which keeps the leaf
             // whole and undeformed; only a leaf no two phases can split ends here.
+            const std::int32_t pick = pick_refusal(menu, count, at, chosen, gone);
             if (pick >= 0) {
               local_refused.push_back(pick);
               refused_[static_cast<std::size_t>(pick)] = 1;
