@@ -9,6 +9,11 @@ using LocalId = std::int32_t;   // index into this process's arrays
 using GlobalId = std::int64_t;  // id across all partitions and ranks
 using PhaseMask = std::uint64_t;  // bit i = phase index i (at most 64 phases)
 
+// Exactly one / two phases in a mask (bit tricks: std::popcount is a library call on
+// baseline x86-64, and the 3D snapping guard asks this tens of millions of times).
+constexpr bool single_bit(PhaseMask m) { return m != 0 && (m & (m - 1)) == 0; }
+constexpr bool two_bits(PhaseMask m) { return m != 0 && single_bit(m & (m - 1)); }
+
 template <int Dim>
 using Vec = std::array<double, Dim>;
 using Vec2 = Vec<2>;

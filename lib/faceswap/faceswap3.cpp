@@ -125,7 +125,7 @@ class Swapper {
       return mesh::signed_volume(a, b, c, d) > 0 ? mesh::aspect_ratio(a, b, c, d) : kInvalid;
     };
     if (o.kind == Kind::kept) {
-      if (std::popcount(o.common) == 1 && is_void(std::countr_zero(o.common))) return 0;
+      if (single_bit(o.common) && is_void(std::countr_zero(o.common))) return 0;
       return measure(o.p[0], o.p[1], o.p[2], o.p[3]);
     }
     double w = 0;

@@ -239,7 +239,7 @@ Outcome outcome(const std::array<LatticePoint3, 4>& lattice, const std::array<Ve
   o.common = mask[0] & mask[1] & mask[2] & mask[3];
   if (o.common != 0) return o;
   const PhaseMask all = mask[0] | mask[1] | mask[2] | mask[3];
-  if (std::popcount(all) != 2) {
+  if (!two_bits(all)) {
     o.kind = Outcome::Kind::unsplittable;
     return o;
   }

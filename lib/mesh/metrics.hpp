@@ -52,8 +52,10 @@ inline double aspect_ratio(const Vec3& a, const Vec3& b, const Vec3& c, const Ve
   const double faces = triangle_area_3d(b, c, d) + triangle_area_3d(a, c, d) +
                        triangle_area_3d(a, b, d) + triangle_area_3d(a, b, c);
   const double r_in = 3.0 * volume / faces;
-  const double l_max = std::max({distance<3>(a, b), distance<3>(a, c), distance<3>(a, d),
-                                 distance<3>(b, c), distance<3>(b, d), distance<3>(c, d)});
+  const auto sq = [](const Vec3& x, const Vec3& y) {
+    return (x[0] - y[0]) * (x[0] - y[0]) + (x[1] - y[1]) * (x[1] - y[1]) + (x[2] - y[2]) * (x[2] - y[2]);
+  };
+  const double l_max = std::sqrt(std::max({sq(a, b), sq(a, c), sq(a, d), sq(b, c), sq(b, d), sq(c, d)}));
   return l_max / (2.0 * std::sqrt(6.0) * r_in);
 }
 

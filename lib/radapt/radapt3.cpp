@@ -19,7 +19,7 @@ namespace tet = grid::tet;
 using grid::LatticeKey3;
 using grid::LatticePoint3;
 
-int single_phase(PhaseMask m) { return std::popcount(m) == 1 ? std::countr_zero(m) : -1; }
+int single_phase(PhaseMask m) { return single_bit(m) ? std::countr_zero(m) : -1; }
 
 enum class OptionKind : std::uint8_t { snap, stay, collapse };
 constexpr int kMaxMenu = 8;  // options of one node: at most max_candidates snaps, stay, collapse
@@ -318,6 +318,14 @@ class Snapper {
       for (std::int32_t o = option_begin_[static_cast<std::size_t>(v)]; o < option_begin_[static_cast<std::size_t>(v) + 1]; ++o)
         always &= option_[static_cast<std::size_t>(o)].mask;
     }
+    if (always != 0) {  // undeformed unless a vertex may snap: nothing to check then
+      bool snaps = false;
+      for (int i = 0; i < 4 && !snaps; ++i) {
+        const std::int32_t v = ids[static_cast<std::size_t>(i)];
+        snaps = option_count(v) > 0 && option_[static_cast<std::size_t>(option_begin_[static_cast<std::size_t>(v)])].kind == OptionKind::snap;
+      }
+      if (!snaps) return false;
+    }
     for (int i = 0; i < 4; ++i) {
       const std::int32_t v = ids[static_cast<std::size_t>(i)];
       auto& m = menu[static_cast<std::size_t>(i)];
@@ -375,6 +383,7 @@ class Snapper {
     std::vector<std::uint8_t> likely(option_.size(), 0);  // pass 1's refusals
     for (std::int32_t t = 0; t < static_cast<std::int32_t>(forest_.size()); ++t) {
       if (!forest_.is_leaf(t) || !build_menu(t, menu, count)) continue;
+      memo_leaf();
       for (int i = 0; i < 4; ++i) chosen[static_cast<std::size_t>(i)] = menu[static_cast<std::size_t>(i)][0];
       ++nodes_.combinations;
       if (acceptable(t, chosen)) continue;
@@ -387,10 +396,21 @@ class Snapper {
     for (std::int32_t t = 0; t < static_cast<std::int32_t>(forest_.size()); ++t) {
       if (!forest_.is_leaf(t) || !build_menu(t, menu, count)) continue;
       ++nodes_.guarded_leaves;
+      memo_leaf();
+      // Pass 1's refusals leave the menus (their combinations cannot happen).
+      for (int i = 0; i < 4; ++i) {
+        auto& m = menu[static_cast<std::size_t>(i)];
+        int& n = count[static_cast<std::size_t>(i)];
+        int kept = 0;
+        for (int j = 0; j < n; ++j) {
+          const std::int32_t o = m[static_cast<std::size_t>(j)];
+          if (o < 0 || !likely[static_cast<std::size_t>(o)]) m[static_cast<std::size_t>(kept++)] = o;
+        }
+        n = kept;
+      }
       local_refused.clear();
       const auto gone = [&](std::int32_t o) {
-        return o >= 0 && (likely[static_cast<std::size_t>(o)] ||
-                          std::find(local_refused.begin(), local_refused.end(), o) != local_refused.end());
+        return o >= 0 && std::find(local_refused.begin(), local_refused.end(), o) != local_refused.end();
       };
       std::array<int, 4> at{0, 0, 0, 0};
       while (true) {
@@ -426,20 +446,23 @@ class Snapper {
 
   // Would the leaf, with its vertices at these options (-1: the node has none, it stays),
   // emit only positive tetrahedra within the bound, and could it be split?
-  bool acceptable(std::int32_t t, const std::array<std::int32_t, 4>& chosen) const {
+  bool acceptable(std::int32_t t, const std::array<std::int32_t, 4>& chosen) {
     const auto& ids = nodes_.tet_nodes[static_cast<std::size_t>(t)];
     std::array<Vec3, 4> pos{};
     std::array<PhaseMask, 4> mask{};
     std::array<grid::stencil3::PointId, 4> id{};
     std::array<LatticePoint3, 4> lattice{};
+    std::array<std::uint32_t, 4> where{};  // 0: the lattice position, 1 + j: the node's j-th snap
     for (int i = 0; i < 4; ++i) {
       const auto k = static_cast<std::size_t>(i);
       const std::int32_t o = chosen[k];
       const auto v = static_cast<std::size_t>(ids[k]);
+      const bool snap = o >= 0 && option_[static_cast<std::size_t>(o)].kind == OptionKind::snap;
       pos[k] = o < 0 ? nodes_.position[v] : option_[static_cast<std::size_t>(o)].position;
       mask[k] = o < 0 ? nodes_.mask[v] : option_[static_cast<std::size_t>(o)].mask;
       id[k] = {nodes_.key[v], nodes_.key[v]};
       lattice[k] = point_[v];
+      where[k] = snap ? static_cast<std::uint32_t>(1 + o - option_begin_[v]) : 0;
     }
     // A strictly cut edge has both ends staying strictly inside different phases: it is
     // a phase-changing edge of this (cut) leaf, with its cut point in the table.
@@ -451,22 +474,47 @@ class Snapper {
       point = cut.point, pid = {cut.lo, cut.hi};
       return true;
     });
-    return acceptable(o);
-  }
-
-  bool acceptable(const grid::stencil3::Outcome& o) const {
     using Kind = grid::stencil3::Outcome::Kind;
     if (o.kind == Kind::unsplittable) return false;
+    // A tet of the leaf is determined by its local points and, for the leaf's vertices, the
+    // positions they take: its verdict is kept for the leaf's other combinations (most
+    // differ in one vertex, and staying or collapsing is one position).
+    const auto key = [&](std::uint8_t a, std::uint8_t b, std::uint8_t c, std::uint8_t d) {
+      std::uint32_t k = 0;
+      for (std::uint8_t q : {a, b, c, d}) k = (k << 7) | (std::uint32_t{q} << 3) | (q < 4 ? where[q] : 0u);
+      return k;
+    };
     if (o.kind == Kind::kept) {
-      if (std::popcount(o.common) == 1 && is_void(std::countr_zero(o.common))) return true;
-      return good(o.p[0], o.p[1], o.p[2], o.p[3]);
+      if (single_bit(o.common) && is_void(std::countr_zero(o.common))) return true;
+      return memo_good(key(0, 1, 2, 3), o.p[0], o.p[1], o.p[2], o.p[3]);
     }
     for (int k = 0; k < o.split.count; ++k) {
       if (is_void(o.phase_of(k))) continue;
       const auto& s = o.split.tet[static_cast<std::size_t>(k)];
-      if (!good(o.p[s[0]], o.p[s[1]], o.p[s[2]], o.p[s[3]])) return false;
+      if (!memo_good(key(s[0], s[1], s[2], s[3]), o.p[s[0]], o.p[s[1]], o.p[s[2]], o.p[s[3]])) return false;
     }
     return true;
+  }
+
+  // Verdicts of good() within the current leaf (memo_leaf() starts a new leaf).
+  static constexpr std::size_t kMemoSize = 512;
+  std::array<std::uint32_t, kMemoSize> memo_key_{};
+  std::array<std::uint32_t, kMemoSize> memo_stamp_{};
+  std::array<std::uint8_t, kMemoSize> memo_value_{};
+  std::uint32_t memo_generation_ = 0;
+  void memo_leaf() { ++memo_generation_; }
+  bool memo_good(std::uint32_t key, const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
+    std::size_t slot = (key * 2654435761u) >> 23 & (kMemoSize - 1);
+    for (std::size_t probe = 0; probe < kMemoSize; ++probe, slot = (slot + 1) & (kMemoSize - 1)) {
+      if (memo_stamp_[slot] != memo_generation_) {
+        memo_stamp_[slot] = memo_generation_;
+        memo_key_[slot] = key;
+        memo_value_[slot] = good(a, b, c, d) ? 1 : 0;
+        return memo_value_[slot] != 0;
+      }
+      if (memo_key_[slot] == key) return memo_value_[slot] != 0;
+    }
+    return good(a, b, c, d);  // the table is full (never with four vertices of four options)
   }
 
   bool good(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) const {

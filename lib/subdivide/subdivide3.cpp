@@ -71,7 +71,7 @@ class Subdivider3 {
   // do (all four on one interface) or none (unresolved leaves), the phase at the centroid.
   int tet_phase(const std::array<std::int32_t, 4>& v) {
     const PhaseMask common = mask_of(v[0]) & mask_of(v[1]) & mask_of(v[2]) & mask_of(v[3]);
-    if (std::popcount(common) == 1) return std::countr_zero(common);
+    if (single_bit(common)) return std::countr_zero(common);
     Vec3 c{0, 0, 0};
     for (std::int32_t id : v)
       for (int d = 0; d < 3; ++d) c[d] += 0.25 * position(id)[d];
@@ -196,7 +196,7 @@ class Subdivider3 {
       if (nodes_.state[static_cast<std::size_t>(id)] != radapt::NodeState::stayed)
         throw std::logic_error("subdivide3: a tet with hanging midpoints has a moved or collapsed vertex (rule R4 broken)");
     const PhaseMask common = mask_of(vid[0]) & mask_of(vid[1]) & mask_of(vid[2]) & mask_of(vid[3]);
-    if (std::popcount(common) != 1)
+    if (!single_bit(common))
       throw std::logic_error("subdivide3: a tet with hanging midpoints is cut (rule R4 broken)");
     const int phase = std::countr_zero(common);
     const auto& c = templates3::closure(forest_.kind(t), hanging, keys);
