@@ -143,7 +143,9 @@ class Swapper {
   }
 
   bool has_hanging_midpoint(std::int32_t t) const {
-    if (forest_.tet(t).level >= forest_.lattice().max_level) return false;
+    const int level = forest_.tet(t).level;
+    if (level >= forest_.lattice().max_level || !nodes_.may_hang(nodes_.tet_nodes[static_cast<std::size_t>(t)], level))
+      return false;
     const auto v = forest_.fine_vertices(t);
     for (const auto& e : tet::kEdges) {
       LatticePoint3 m{};

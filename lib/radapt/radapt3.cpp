@@ -99,7 +99,12 @@ class Snapper {
       if (!forest_.is_leaf(t)) continue;
       const auto v = forest_.fine_vertices(t);
       auto& ids = nodes_.tet_nodes[static_cast<std::size_t>(t)];
-      for (int i = 0; i < 4; ++i) ids[static_cast<std::size_t>(i)] = add_node(v[i]);
+      const std::uint8_t level = forest_.tet(t).level;
+      for (int i = 0; i < 4; ++i) {
+        ids[static_cast<std::size_t>(i)] = add_node(v[i]);
+        std::uint8_t& finest = nodes_.finest_level[static_cast<std::size_t>(ids[static_cast<std::size_t>(i)])];
+        finest = std::max(finest, level);
+      }
       const auto candidates = g_.candidates_of_tet(t);
       if (g_.is_cut(t)) {
         for (std::int32_t id : ids)
@@ -130,6 +135,7 @@ class Snapper {
       nodes_.key.push_back(k);
       nodes_.position.push_back(forest_.position(p));
       nodes_.mask.push_back(0);
+      nodes_.finest_level.push_back(0);
       point_.push_back(p);
     }
     return id;

@@ -66,6 +66,9 @@ struct Nodes3 {
   std::vector<Vec3> position;
   std::vector<PhaseMask> mask;
   std::vector<NodeState> state;
+  // Per node, the finest level of the leaves around it. A leaf of level l can hold a node at
+  // an edge's midpoint only if a finer leaf touches one of the edge's ends.
+  std::vector<std::uint8_t> finest_level;
   // Node ids of each leaf's vertices (fine_vertices order), indexed by forest tet;
   // unspecified for non-leaves.
   std::vector<std::array<std::int32_t, 4>> tet_nodes;
@@ -94,6 +97,12 @@ struct Nodes3 {
     return it == edge_index.end() ? -1 : it->second;
   }
   bool moved(std::int32_t n) const { return state[static_cast<std::size_t>(n)] == NodeState::snapped; }
+  // Could leaf `t` (level `level`, vertices `ids`) carry a node at one of its edge midpoints?
+  bool may_hang(const std::array<std::int32_t, 4>& ids, int level) const {
+    for (std::int32_t n : ids)
+      if (finest_level[static_cast<std::size_t>(n)] > level) return true;
+    return false;
+  }
   const std::array<std::int32_t, 6>* edges_of(std::int32_t t) const {
     const std::int32_t slot = cut_leaf_slot[static_cast<std::size_t>(t)];
     return slot < 0 ? nullptr : &leaf_edges[static_cast<std::size_t>(slot)];

@@ -117,7 +117,7 @@ class Subdivider3 {
     std::array<std::int32_t, 6> mid_id{};
     std::array<LatticeKey3, 10> keys{};
     for (int i = 0; i < 4; ++i) keys[static_cast<std::size_t>(i)] = grid::key3(v[i]);
-    if (level < forest_.lattice().max_level)
+    if (level < forest_.lattice().max_level && nodes_.may_hang(ids, level))
       for (int e = 0; e < 6; ++e) {
         const LatticeKey3 k = grid::midpoint_key3(keys[tet::kEdges[e][0]], keys[tet::kEdges[e][1]]);
         keys[static_cast<std::size_t>(tet::midpoint(e))] = k;
