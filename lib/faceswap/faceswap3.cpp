@@ -87,12 +87,7 @@ class Swapper {
       c.lo = k.first, c.hi = k.second;
       const Vec3 &pa = pos(a), &pb = pos(b);
       oracle_.crossings(pa, pb, g_.candidates_of_tet(leaf), crossings_);
-      const geometry::Crossing* chosen = nullptr;
-      for (const auto& x : crossings_)
-        if ((mask(a) & (PhaseMask{1} << x.from_phase)) && (mask(b) & (PhaseMask{1} << x.to_phase))) {
-          chosen = &x;
-          break;
-        }
+      const geometry::Crossing* chosen = radapt::crossing_between(crossings_, mask(a), mask(b));
       if (chosen != nullptr) {
         for (int d = 0; d < 3; ++d) c.point[d] = pa[d] + chosen->t * (pb[d] - pa[d]);
         c.mask = (PhaseMask{1} << chosen->from_phase) | (PhaseMask{1} << chosen->to_phase);

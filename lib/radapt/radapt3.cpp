@@ -183,12 +183,7 @@ class Snapper {
     ends.axis = differing == 1;
     ends.length = mesh::distance<3>(pa, pb);
     const PhaseMask ma = nodes_.mask[static_cast<std::size_t>(lo)], mb = nodes_.mask[static_cast<std::size_t>(hi)];
-    const geometry::Crossing* chosen = nullptr;
-    for (const auto& c : crossings_)
-      if ((ma & (PhaseMask{1} << c.from_phase)) && (mb & (PhaseMask{1} << c.to_phase))) {
-        chosen = &c;
-        break;
-      }
+    const geometry::Crossing* chosen = crossing_between(crossings_, ma, mb);
     if (chosen == nullptr && !crossings_.empty()) {
       // No crossing goes straight from one end's phase to the other's: a third phase lies
       // in between, thinner than the edge (a gap at a contact). Its first crossing stands

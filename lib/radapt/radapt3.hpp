@@ -49,6 +49,15 @@ struct EdgeCut {
   bool found = false;  // false: the oracle saw no crossing (point = midpoint)
 };
 
+// The first of `crossings` (ascending along a segment) that leaves a phase of `from` for a
+// phase of `to`, or null: the interface between the ends of a phase-changing edge.
+inline const geometry::Crossing* crossing_between(const std::vector<geometry::Crossing>& crossings, PhaseMask from,
+                                                  PhaseMask to) {
+  for (const auto& c : crossings)
+    if ((from & (PhaseMask{1} << c.from_phase)) && (to & (PhaseMask{1} << c.to_phase))) return &c;
+  return nullptr;
+}
+
 struct KeyPairHash {
   std::size_t operator()(const std::pair<grid::LatticeKey3, grid::LatticeKey3>& p) const {
     std::uint64_t h = p.first * 0x9e3779b97f4a7c15ULL;
