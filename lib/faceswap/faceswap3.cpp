@@ -102,8 +102,10 @@ class Swapper {
   }
 
   // The worst aspect ratio of what a tet (kept or split) emits, ignoring void tets; kInvalid
-  // when a tet would be inverted or could not be split.
-  double worst(const std::array<std::int32_t, 4>& node, const std::array<LatticePoint3, 4>& lattice, std::int32_t leaf) {
+  // when a tet would be inverted or could not be split. `leaf_edges`: the leaf's own
+  // phase-changing edges when the tet is a leaf (null: look edges up by their keys).
+  double worst(const std::array<std::int32_t, 4>& node, const std::array<LatticePoint3, 4>& lattice, std::int32_t leaf,
+               const std::array<std::int32_t, 6>* leaf_edges = nullptr) {
     std::array<Vec3, 4> p{};
     std::array<PhaseMask, 4> m{};
     std::array<stencil3::PointId, 4> id{};
@@ -112,6 +114,13 @@ class Swapper {
       p[k] = pos(node[k]), m[k] = mask(node[k]), id[k] = {key(node[k]), key(node[k])};
     }
     const auto o = stencil3::outcome(lattice, p, m, id, [&](int e, Vec3& point, stencil3::PointId& pid) {
+      if (leaf_edges != nullptr) {
+        const std::int32_t ei = (*leaf_edges)[static_cast<std::size_t>(e)];
+        if (ei < 0) return false;
+        const radapt::EdgeCut& c = nodes_.edges[static_cast<std::size_t>(ei)];
+        point = c.point, pid = {c.lo, c.hi};
+        return true;
+      }
       return cut_point(node[tet::kEdges[e][0]], node[tet::kEdges[e][1]], leaf, point, pid);
     });
     using Kind = stencil3::Outcome::Kind;
@@ -134,7 +143,9 @@ class Swapper {
 
   double leaf_worst(std::int32_t t) {
     const auto& ids = nodes_.tet_nodes[static_cast<std::size_t>(t)];
-    return worst({ids[0], ids[1], ids[2], ids[3]}, forest_.fine_vertices(t), t);
+    static constexpr std::array<std::int32_t, 6> kNone{-1, -1, -1, -1, -1, -1};
+    const auto* edges = nodes_.edges_of(t);
+    return worst({ids[0], ids[1], ids[2], ids[3]}, forest_.fine_vertices(t), t, edges != nullptr ? edges : &kNone);
   }
 
   bool has_hanging_midpoint(std::int32_t t) const {

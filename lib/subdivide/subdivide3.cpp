@@ -14,6 +14,7 @@ namespace cisamr::subdivide {
 namespace {
 
 namespace tet = grid::tet;
+constexpr double kHoneycombWorst = 1.3660254037844386;  // the trirectangular corner tet (regular: 1)
 using grid::LatticeKey3;
 
 class Subdivider3 {
@@ -82,9 +83,16 @@ class Subdivider3 {
   }
 
   enum class Origin { closure, kept, split, swapped };
-  void emit(const std::array<std::int32_t, 4>& v, int phase, Origin origin) {
+  // `honeycomb`: a closure tet or an undeformed leaf, whose shape (and aspect ratio, `known`)
+  // the tables give: no need to measure it.
+  void emit(const std::array<std::int32_t, 4>& v, int phase, Origin origin, double known = -1) {
     out_.tets.insert(out_.tets.end(), v.begin(), v.end());
     out_.phase.push_back(phase);
+    if (known >= 0) {
+      if (origin == Origin::closure) out_.worst_closure = std::max(out_.worst_closure, known);
+      if (origin == Origin::kept) out_.worst_kept = std::max(out_.worst_kept, known);
+      return;
+    }
     const Vec3 &a = position(v[0]), &b = position(v[1]), &c = position(v[2]), &d = position(v[3]);
     if (!(mesh::signed_volume(a, b, c, d) > 0)) ++out_.inverted;
     const double aspect = mesh::aspect_ratio(a, b, c, d);
@@ -173,7 +181,11 @@ class Subdivider3 {
     });
     using Kind = grid::stencil3::Outcome::Kind;
     if (o.kind == Kind::kept) {
-      emit(vid, tet_phase(vid), whole);
+      // A leaf with no moved vertex is a honeycomb tet (aspect ratio 1, or 1.366 for a
+      // corner tet), and the guard checked every deformed one.
+      bool moved = whole != Origin::kept;
+      for (std::int32_t n : vid) moved = moved || nodes_.moved(n);
+      emit(vid, tet_phase(vid), whole, moved ? -1.0 : kHoneycombWorst);
       return;
     }
     ++out_.cut_tets;
@@ -210,7 +222,7 @@ class Subdivider3 {
     }
     for (int i = 0; i < c.count; ++i) {
       const auto& s = c.tet[static_cast<std::size_t>(i)];
-      emit({point[s[0]], point[s[1]], point[s[2]], point[s[3]]}, phase, Origin::closure);
+      emit({point[s[0]], point[s[1]], point[s[2]], point[s[3]]}, phase, Origin::closure, c.max_aspect);
     }
   }
 
