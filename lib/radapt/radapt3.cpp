@@ -384,7 +384,7 @@ class Snapper {
     std::vector<std::uint8_t> likely(option_.size(), 0);  // pass 1's refusals
     for (std::int32_t t = 0; t < static_cast<std::int32_t>(forest_.size()); ++t) {
       if (!forest_.is_leaf(t) || !build_menu(t, menu, count)) continue;
-      memo_leaf();
+      memo_leaf(t);
       for (int i = 0; i < 4; ++i) chosen[static_cast<std::size_t>(i)] = menu[static_cast<std::size_t>(i)][0];
       ++nodes_.combinations;
       if (acceptable(t, chosen)) continue;
@@ -397,7 +397,7 @@ class Snapper {
     for (std::int32_t t = 0; t < static_cast<std::int32_t>(forest_.size()); ++t) {
       if (!forest_.is_leaf(t) || !build_menu(t, menu, count)) continue;
       ++nodes_.guarded_leaves;
-      memo_leaf();
+      memo_leaf(t);
       // Pass 1's refusals leave the menus (their combinations cannot happen).
       for (int i = 0; i < 4; ++i) {
         auto& m = menu[static_cast<std::size_t>(i)];
@@ -449,34 +449,17 @@ class Snapper {
   // emit only positive tetrahedra within the bound, and could it be split?
   bool acceptable(std::int32_t t, const std::array<std::int32_t, 4>& chosen) {
     const auto& ids = nodes_.tet_nodes[static_cast<std::size_t>(t)];
-    std::array<Vec3, 4> pos{};
     std::array<PhaseMask, 4> mask{};
-    std::array<grid::stencil3::PointId, 4> id{};
-    std::array<LatticePoint3, 4> lattice{};
     std::array<std::uint32_t, 4> where{};  // 0: the lattice position, 1 + j: the node's j-th snap
     for (int i = 0; i < 4; ++i) {
       const auto k = static_cast<std::size_t>(i);
       const std::int32_t o = chosen[k];
       const auto v = static_cast<std::size_t>(ids[k]);
       const bool snap = o >= 0 && option_[static_cast<std::size_t>(o)].kind == OptionKind::snap;
-      pos[k] = o < 0 ? nodes_.position[v] : option_[static_cast<std::size_t>(o)].position;
+      leaf_.p[k] = o < 0 ? nodes_.position[v] : option_[static_cast<std::size_t>(o)].position;
       mask[k] = o < 0 ? nodes_.mask[v] : option_[static_cast<std::size_t>(o)].mask;
-      id[k] = {nodes_.key[v], nodes_.key[v]};
-      lattice[k] = point_[v];
       where[k] = snap ? static_cast<std::uint32_t>(1 + o - option_begin_[v]) : 0;
     }
-    // A strictly cut edge has both ends staying strictly inside different phases: it is
-    // a phase-changing edge of this (cut) leaf, with its cut point in the table.
-    const auto* edges = nodes_.edges_of(t);
-    const auto o = grid::stencil3::outcome(lattice, pos, mask, id, [&](int e, Vec3& point, grid::stencil3::PointId& pid) {
-      const std::int32_t ei = edges == nullptr ? -1 : (*edges)[static_cast<std::size_t>(e)];
-      if (ei < 0) return false;
-      const EdgeCut& cut = nodes_.edges[static_cast<std::size_t>(ei)];
-      point = cut.point, pid = {cut.lo, cut.hi};
-      return true;
-    });
-    using Kind = grid::stencil3::Outcome::Kind;
-    if (o.kind == Kind::unsplittable) return false;
     // A tet of the leaf is determined by its local points and, for the leaf's vertices, the
     // positions they take: its verdict is kept for the leaf's other combinations (most
     // differ in one vertex, and staying or collapsing is one position).
@@ -485,17 +468,56 @@ class Snapper {
       for (std::uint8_t q : {a, b, c, d}) k = (k << 7) | (std::uint32_t{q} << 3) | (q < 4 ? where[q] : 0u);
       return k;
     };
-    if (o.kind == Kind::kept) {
-      if (single_bit(o.common) && is_void(std::countr_zero(o.common))) return true;
-      return memo_good(key(0, 1, 2, 3), o.p[0], o.p[1], o.p[2], o.p[3]);
+    const auto& p = leaf_.p;
+    const PhaseMask common = mask[0] & mask[1] & mask[2] & mask[3];
+    if (common != 0) {  // kept whole (grid::stencil3::outcome)
+      if (single_bit(common) && is_void(std::countr_zero(common))) return true;
+      return memo_good(key(0, 1, 2, 3), p[0], p[1], p[2], p[3]);
     }
-    for (int k = 0; k < o.split.count; ++k) {
-      if (is_void(o.phase_of(k))) continue;
-      const auto& s = o.split.tet[static_cast<std::size_t>(k)];
-      if (!memo_good(key(s[0], s[1], s[2], s[3]), o.p[s[0]], o.p[s[1]], o.p[s[2]], o.p[s[3]])) return false;
+    const PhaseMask all = mask[0] | mask[1] | mask[2] | mask[3];
+    if (!two_bits(all)) return false;  // three phases: no stencil
+    const PhaseMask plus = all & (~all + 1), minus = all & ~plus;
+    std::array<int, 4> sign{};
+    int pattern = 0;
+    for (int i = 3; i >= 0; --i) {
+      const PhaseMask m = mask[static_cast<std::size_t>(i)];
+      sign[static_cast<std::size_t>(i)] = (m & plus) && (m & minus) ? 0 : (m & plus) ? 1 : -1;
+      pattern = 3 * pattern + sign[static_cast<std::size_t>(i)] + 1;
+    }
+    // A strictly cut edge has both ends staying strictly inside different phases: it is a
+    // phase-changing edge of this (cut) leaf, whose cut point radapt computed.
+    for (int e = 0; e < 6; ++e)
+      if (sign[tet::kEdges[e][0]] * sign[tet::kEdges[e][1]] < 0 && !leaf_.has_cut[static_cast<std::size_t>(e)])
+        return false;
+    // The split's structure depends on the signs and on the cut points only (the interface
+    // quad takes its shorter diagonal), so one per sign pattern and phase pair.
+    auto& cached = leaf_.split[static_cast<std::size_t>(pattern)];
+    if (leaf_.stamp[static_cast<std::size_t>(pattern)] != memo_generation_ || leaf_.pair[static_cast<std::size_t>(pattern)] != all) {
+      cached = grid::stencil3::split(leaf_.lattice, sign, leaf_.id, p);
+      leaf_.stamp[static_cast<std::size_t>(pattern)] = memo_generation_;
+      leaf_.pair[static_cast<std::size_t>(pattern)] = all;
+    }
+    const int phase_plus = std::countr_zero(plus), phase_minus = std::countr_zero(minus);
+    for (int k = 0; k < cached.count; ++k) {
+      if (is_void(cached.side[static_cast<std::size_t>(k)] > 0 ? phase_plus : phase_minus)) continue;
+      const auto& s = cached.tet[static_cast<std::size_t>(k)];
+      if (!memo_good(key(s[0], s[1], s[2], s[3]), p[s[0]], p[s[1]], p[s[2]], p[s[3]])) return false;
     }
     return true;
   }
+
+  // The leaf being guarded: its lattice points, point identities and cut points (points
+  // 0-3 are set per combination), and its splits by sign pattern.
+  struct LeafData {
+    std::array<LatticePoint3, 4> lattice{};
+    std::array<grid::stencil3::PointId, 10> id{};
+    std::array<Vec3, 10> p{};
+    std::array<bool, 6> has_cut{};
+    std::array<grid::stencil3::Split, 81> split;
+    std::array<std::uint32_t, 81> stamp{};
+    std::array<PhaseMask, 81> pair{};
+  };
+  LeafData leaf_;
 
   // Verdicts of good() within the current leaf (memo_leaf() starts a new leaf).
   static constexpr std::size_t kMemoSize = 512;
@@ -503,7 +525,24 @@ class Snapper {
   std::array<std::uint32_t, kMemoSize> memo_stamp_{};
   std::array<std::uint8_t, kMemoSize> memo_value_{};
   std::uint32_t memo_generation_ = 0;
-  void memo_leaf() { ++memo_generation_; }
+  void memo_leaf(std::int32_t t) {
+    ++memo_generation_;
+    const auto& ids = nodes_.tet_nodes[static_cast<std::size_t>(t)];
+    for (int i = 0; i < 4; ++i) {
+      const auto v = static_cast<std::size_t>(ids[static_cast<std::size_t>(i)]);
+      leaf_.lattice[static_cast<std::size_t>(i)] = point_[v];
+      leaf_.id[static_cast<std::size_t>(i)] = {nodes_.key[v], nodes_.key[v]};
+    }
+    const auto* edges = nodes_.edges_of(t);
+    for (int e = 0; e < 6; ++e) {
+      const std::int32_t ei = edges == nullptr ? -1 : (*edges)[static_cast<std::size_t>(e)];
+      leaf_.has_cut[static_cast<std::size_t>(e)] = ei >= 0;
+      if (ei < 0) continue;
+      const EdgeCut& cut = nodes_.edges[static_cast<std::size_t>(ei)];
+      leaf_.p[static_cast<std::size_t>(tet::midpoint(e))] = cut.point;
+      leaf_.id[static_cast<std::size_t>(tet::midpoint(e))] = {cut.lo, cut.hi};
+    }
+  }
   bool memo_good(std::uint32_t key, const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
     std::size_t slot = (key * 2654435761u) >> 23 & (kMemoSize - 1);
     for (std::size_t probe = 0; probe < kMemoSize; ++probe, slot = (slot + 1) & (kMemoSize - 1)) {
