@@ -112,8 +112,14 @@ class Snapper {
             nodes_.mask[static_cast<std::size_t>(id)] =
                 oracle_.closure_phases(nodes_.position[static_cast<std::size_t>(id)], candidates);
       } else {
+        // No boundary meets the leaf: its vertices lie strictly inside its phase, so one
+        // already classified (by a neighbour) tells it without asking the oracle.
         PhaseMask bit = matrix_bit;
-        if (!candidates.empty()) {
+        PhaseMask known = 0;
+        for (std::int32_t id : ids) known = known != 0 ? known : nodes_.mask[static_cast<std::size_t>(id)];
+        if (known != 0) {
+          bit = known;
+        } else if (!candidates.empty()) {
           Vec3 centre{0, 0, 0};
           for (std::int32_t id : ids)
             for (int d = 0; d < 3; ++d) centre[d] += 0.25 * nodes_.position[static_cast<std::size_t>(id)][d];
