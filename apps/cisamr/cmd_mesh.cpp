@@ -4,6 +4,7 @@
 // --partitions N, or under mpiexec -n P: the parallel mesher of lib/parallel (Algorithm 2),
 // through MPI or, on one process, through the serial Comm.
 #include <chrono>
+#include <cmath>
 #include <cinttypes>
 #include <cstdio>
 #include <filesystem>
@@ -43,6 +44,7 @@ struct MeshArgs {
   bool gather = false;
   bool fixed_ghost = false;  // the fixed 3-cell inclusion margin instead of the level-aware one
   int closure_rounds = 0;    // ghost closure rounds (0: none, the default; -1: the full closure)
+  double ghost_cubes = 0;    // 3D: a forced ghost margin in coarse cubes (0: the reach-derived one)
 };
 
 void progress(const GlobalFlags& flags, const char* what) {
@@ -250,6 +252,7 @@ void run_parallel(const MeshArgs& args, const GlobalFlags& flags, int& exit_code
   options.partitions = args.partitions > 0 ? args.partitions : comm.size();
   options.ghost.level_aware = !args.fixed_ghost;
   options.ghost.max_closure_rounds = args.closure_rounds;
+  options.ghost.margin3_cubes = args.ghost_cubes;
   parallel::DistributedMesh<Dim> dm = parallel::mesh_distributed<Dim>(comm, std::move(scene), options);
   dm.times.add("read", read_seconds);
   const mesh::SimplexMesh<Dim>& piece = dm.piece.mesh;
@@ -272,6 +275,11 @@ void run_parallel(const MeshArgs& args, const GlobalFlags& flags, int& exit_code
     }
   }
   const std::uint64_t checksum = parallel::mesh_checksum(comm, piece);
+  // STL files read per rank (3D: each file by one rank for boxes, loads and unions, then by
+  // the ranks whose partitions need it).
+  const std::int64_t stl_min = -comm.allreduce_max(-dm.stl_files_read);
+  const std::int64_t stl_max = comm.allreduce_max(dm.stl_files_read);
+  const std::int64_t stl_total = comm.allreduce_sum(dm.stl_files_read);
   if (show) std::fprintf(stderr, "cisamr: writing the mesh\n");
   {
     ScopedPhase timer(&dm.times, "write");
@@ -329,14 +337,15 @@ void run_parallel(const MeshArgs& args, const GlobalFlags& flags, int& exit_code
       j["aspect_ratio"] = aspect_json(aspect);
       j["algorithm"] = algorithm_json(args, dm.stats);
       if constexpr (Dim == 2) j["algorithm"]["coarse_cells_meshed"] = dm.stats.coarse_cells;
-      if constexpr (Dim == 3) j["stl_files_read_by_rank_0"] = dm.stl_files_read;
+      if constexpr (Dim == 3) j["stl_files_read"] = {{"min", stl_min}, {"max", stl_max}, {"total", stl_total}};
       nlohmann::json times = nlohmann::json::object();
       for (const auto& s : spread) times[s.name] = {{"min", s.min}, {"max", s.max}, {"mean", s.mean}};
       j["timings_s"] = times;
       j["total_s"] = total;
       j["ranks"] = comm.size();
       j["partition_method"] = dm.partition_method;
-      j["ghost_rule"] = args.fixed_ghost ? "fixed-3-cells" : "level-aware";
+      j["ghost_rule"] = Dim == 3 ? (args.ghost_cubes > 0 ? "forced-" + std::to_string(static_cast<int>(std::ceil(args.ghost_cubes))) + "-cubes" : std::string("reach-3d"))
+                                 : args.fixed_ghost ? "fixed-3-cells" : "level-aware";
       j["load"] = {{"max", max_load}, {"mean", mean_load}, {"imbalance", mean_load > 0 ? max_load / mean_load : 1.0}};
       nlohmann::json parts = nlohmann::json::array();
       for (const auto& p : dm.partitions)
@@ -419,10 +428,15 @@ void add_mesh_command(CLI::App& app, GlobalFlags& flags, int& exit_code) {
   cmd->add_flag("--gather", args->gather,
                 "Parallel run: write one file on rank 0 (any format) instead of .pvtu pieces");
   cmd->add_flag("--fixed-ghost", args->fixed_ghost,
-                "Parallel run: a fixed 3-cell margin around every inclusion instead of the level-aware one");
+                "Parallel run (2D): a fixed 3-cell margin around every inclusion instead of the level-aware one");
   cmd->add_option("--ghost-closure-rounds", args->closure_rounds,
                   "Comparison: chain the ghost region through R rounds of nearby inclusions (0, the default, "
                   "is exact because inclusion levels are settled beforehand; -1: the full closure)")
+      ->group("");
+  cmd->add_option("--ghost-cubes", args->ghost_cubes,
+                  "Comparison (3D): a ghost of this many coarse cubes instead of the one derived from the "
+                  "kernel's reach (lib/parallel/README.md); too few break partition invariance")
+      ->check(CLI::Range(0.0, 1e6))
       ->group("");
   cmd->callback([args, &flags, &exit_code] {
     if (parallel::world().size() > 1 || args->partitions > 0) {
@@ -430,7 +444,7 @@ void add_mesh_command(CLI::App& app, GlobalFlags& flags, int& exit_code) {
       const auto start = std::chrono::steady_clock::now();
       geometry::SceneDesc scene;
       parallel::run_collectively(parallel::world(), [&] {
-        scene = io::read_scene(args->scene, io::ReadSceneOptions{.load_stl = false});
+        scene = io::read_scene(args->scene, io::ReadSceneOptions{.load_stl = false, .probe_stl = false});
       });
       if (scene.dimension == 3)
         run_parallel<3>(*args, flags, exit_code, std::move(scene), start);

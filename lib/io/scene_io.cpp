@@ -116,12 +116,22 @@ struct DuplicateKeyFinder {
 
 // The checks shared by every field: each takes the value and its field path and returns
 // the converted value or throws InputError naming that path.
+// Why an STL file cannot be read ("" when it can be opened), as the scene reader words it.
+std::string stl_file_problem(const std::string& file) {
+  std::error_code ec;
+  if (fs::is_directory(file, ec)) return "'" + file + "' is a directory";
+  std::ifstream probe(file, std::ios::binary);
+  if (!probe) return "cannot read '" + file + "': " + std::strerror(errno);
+  return "";
+}
+
 class SceneReader {
  public:
   SceneReader(std::string file, fs::path base_directory)
       : file_(std::move(file)), base_directory_(std::move(base_directory)) {}
-  SceneReader(std::string file, fs::path base_directory, bool load_stl)
-      : file_(std::move(file)), base_directory_(std::move(base_directory)), load_stl_(load_stl) {}
+  SceneReader(std::string file, fs::path base_directory, const ReadSceneOptions& options)
+      : file_(std::move(file)), base_directory_(std::move(base_directory)), load_stl_(options.load_stl),
+        probe_stl_(options.probe_stl) {}
 
   [[noreturn]] void fail(const std::string& field, const std::string& problem) const {
     throw InputError(file_, field, problem);
@@ -429,11 +439,10 @@ class SceneReader {
       const std::string given = string(required(object, field, "file"), file_field);
       if (given.empty()) fail(file_field, "empty file name");
       s.file = resolve(given);
-      std::error_code ec;
-      if (fs::is_directory(s.file, ec)) fail(file_field, "'" + s.file + "' is a directory");
-      std::ifstream probe(s.file, std::ios::binary);
-      if (!probe)
-        fail(file_field, "cannot read '" + s.file + "': " + std::strerror(errno));
+      if (load_stl_ || probe_stl_) {
+        const std::string problem = stl_file_problem(s.file);
+        if (!problem.empty()) fail(file_field, problem);
+      }
       if (load_stl_) s.triangles = read_stl(s.file);  // its own errors name the STL file and line
       if (const json* v = member(object, "scale")) s.scale = positive(*v, join(field, "scale"));
       if (const json* r = member(object, "rotation")) s.rotation = rotation(*r, join(field, "rotation"));
@@ -456,7 +465,8 @@ class SceneReader {
  private:
   std::string file_;
   fs::path base_directory_;
-  bool load_stl_ = true;  // false: STL triangles are read later (load_stl_surfaces)
+  bool load_stl_ = true;   // false: STL triangles are read later (load_stl_surfaces)
+  bool probe_stl_ = true;  // without load_stl_: still check that each STL file can be opened
 };
 
 const std::vector<std::string_view> kShapes2 = {"circle", "ellipse", "polygon", "nurbs"};
@@ -827,15 +837,30 @@ SceneDesc parse_scene(const std::string& json_text, const std::string& source, c
   }
   if (!duplicates.duplicate_field.empty())
     throw InputError(source, duplicates.duplicate_field, "duplicate key");
-  return SceneReader(source, directory_of(source), options.load_stl).scene(root);
+  return SceneReader(source, directory_of(source), options).scene(root);
 }
 
 SceneDesc read_scene(const std::string& path) { return read_scene(path, ReadSceneOptions{}); }
 
-void load_stl_surfaces(SceneDesc& scene, std::span<const std::int32_t> inclusions) {
-  for (std::int32_t k : inclusions)
-    if (auto* s = std::get_if<StlSurface>(&scene.inclusions.at(static_cast<std::size_t>(k)).shape))
-      if (s->triangles.empty()) s->triangles = read_stl(s->file);
+std::int64_t load_stl_surfaces(SceneDesc& scene, std::span<const std::int32_t> inclusions, StlCache* cache) {
+  StlCache local;
+  StlCache& files = cache != nullptr ? *cache : local;
+  std::int64_t read = 0;
+  for (std::int32_t k : inclusions) {
+    auto* s = std::get_if<StlSurface>(&scene.inclusions.at(static_cast<std::size_t>(k)).shape);
+    if (s == nullptr || !s->triangles.empty()) continue;
+    auto it = files.find(s->file);
+    if (it == files.end()) {
+      // As read_scene reports it: the scene's field for a file that cannot be opened, the
+      // STL file and line for a malformed one.
+      const std::string problem = stl_file_problem(s->file);
+      if (!problem.empty()) throw InputError(scene.source, "inclusions[" + std::to_string(k) + "].file", problem);
+      it = files.emplace(s->file, read_stl(s->file)).first;
+      ++read;
+    }
+    s->triangles = it->second;
+  }
+  return read;
 }
 
 SceneDesc read_scene(const std::string& path, const ReadSceneOptions& options) {

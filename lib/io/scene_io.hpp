@@ -6,8 +6,10 @@
 // of different phases, closure of NURBS) is left to the geometry oracle.
 // See lib/io/README.md for the rules and defaults.
 #include <cstdint>
+#include <map>
 #include <span>
 #include <string>
+#include <vector>
 
 #include "geometry/scene.hpp"
 
@@ -18,18 +20,26 @@ namespace cisamr::io {
 geometry::SceneDesc read_scene(const std::string& path);
 
 // Lazy STL loading (the parallel mesher: a rank reads only the STL files its partitions
-// need). With load_stl = false every field is read and checked as usual (the STL file must
-// exist and be readable) but StlSurface::triangles stay empty; load_stl_surfaces fills them.
+// need). With load_stl = false every field is read and checked as usual but
+// StlSurface::triangles stay empty; load_stl_surfaces fills them. probe_stl (with
+// load_stl = false): still open each STL file to check that it can be read; false leaves
+// that check, with the same message, to load_stl_surfaces.
 struct ReadSceneOptions {
   bool load_stl = true;
+  bool probe_stl = true;
 };
 geometry::SceneDesc read_scene(const std::string& path, const ReadSceneOptions& options);
 geometry::SceneDesc parse_scene(const std::string& json_text, const std::string& source,
                                 const ReadSceneOptions& options);
 
 // Reads the triangles of the listed inclusions (scene indices) that are STL surfaces with
-// none yet. Errors as read_scene's (InputError naming the STL file).
-void load_stl_surfaces(geometry::SceneDesc& scene, std::span<const std::int32_t> inclusions);
+// none yet, each file once (per call, or per `cache`: file → triangles, filled as files
+// are read). Returns the number of files read. Errors as read_scene's: a file that cannot
+// be opened is an InputError naming the scene and "inclusions[k].file", a malformed one an
+// InputError naming the STL file.
+using StlCache = std::map<std::string, std::vector<std::array<Vec3, 3>>>;
+std::int64_t load_stl_surfaces(geometry::SceneDesc& scene, std::span<const std::int32_t> inclusions,
+                               StlCache* cache = nullptr);
 
 // The same on text already in memory; `source` names it in errors and its directory
 // resolves relative STL paths ("" = the current directory).

@@ -2,10 +2,12 @@
 
 #include <algorithm>
 #include <chrono>
+#include <map>
 #include <regex>
 
 #include "geometry/oracle2.hpp"
 #include "geometry/oracle3.hpp"
+#include "geometry/shapes.hpp"
 #include "io/scene_io.hpp"
 #include "parallel/collective.hpp"
 #include "parallel/exchange.hpp"
@@ -33,16 +35,25 @@ std::string rename_inclusions(const std::string& text, const std::vector<std::in
   return out + text.substr(last);
 }
 
+}  // namespace
+
+// Not in the anonymous namespace: the exported templates' lambdas capture them.
+namespace distributed_detail {
 struct Box {  // a partition as broadcast by rank 0
   std::int32_t id;
   std::int64_t lo[3], hi[3];
   double load;
 };
 
-struct StlBox {  // an STL inclusion's bounding box, as rank 0 read it
+struct StlBox {  // an STL surface's bounding box, as the rank that read it computed it
   std::int32_t inclusion;
   Box3 box;
 };
+}  // namespace distributed_detail
+using distributed_detail::Box;
+using distributed_detail::StlBox;
+
+namespace {
 
 std::vector<std::int32_t> stl_inclusions(const geometry::SceneDesc& scene) {
   std::vector<std::int32_t> out;
@@ -51,6 +62,95 @@ std::vector<std::int32_t> stl_inclusions(const geometry::SceneDesc& scene) {
       out.push_back(static_cast<std::int32_t>(k));
   return out;
 }
+
+}  // namespace
+
+StlShares share_stl_surfaces(const Comm& comm, geometry::SceneDesc& scene, const partition::PartitionOptions& popt,
+                             bool loads_needed) {
+  StlShares out;
+  const int ranks = comm.size(), rank = comm.rank();
+  const std::size_t n = scene.inclusions.size();
+  out.known.resize(n);
+  const std::vector<std::int32_t> unread = stl_inclusions(scene);
+  std::vector<int> owner(n, -1);  // the rank that reads inclusion k's file
+  {
+    std::map<std::string, int> file_rank;
+    for (std::int32_t k : unread) {
+      const auto& file = std::get<geometry::StlSurface>(scene.inclusions[static_cast<std::size_t>(k)].shape).file;
+      const auto [it, inserted] = file_rank.try_emplace(file, static_cast<int>(file_rank.size()) % ranks);
+      owner[static_cast<std::size_t>(k)] = it->second;
+    }
+  }
+  std::vector<std::int32_t> mine;
+  for (std::int32_t k : unread)
+    if (owner[static_cast<std::size_t>(k)] == rank) mine.push_back(k);
+
+  Packer boxes, loads;
+  run_collectively(comm, [&] {
+    out.files_read += io::load_stl_surfaces(scene, mine, &out.cache);
+    std::vector<StlBox> b;
+    for (std::int32_t k : mine) {
+      const geometry::Inclusion& inc = scene.inclusions[static_cast<std::size_t>(k)];
+      b.push_back({k, geometry::shape_bounding_box(inc.shape)});
+      if (!loads_needed) continue;
+      const partition::InclusionLoad load = partition::stl_surface_load(scene, k, popt);
+      loads.put<std::int32_t>(k);
+      loads.put_vector(load.cells);
+      loads.put_vector(load.loads);
+      loads.put(load.box);
+    }
+    boxes.put_vector(b);
+  });
+  for (const Bytes& bytes : allgather_bytes(comm, boxes.bytes()))
+    for (const StlBox& b : Unpacker(bytes).get_vector<StlBox>()) out.known[static_cast<std::size_t>(b.inclusion)] = b.box;
+  if (loads_needed) {
+    out.loads.resize(n);
+    for (const Bytes& bytes : gather_bytes(comm, loads.take())) {
+      Unpacker u(bytes);
+      while (!u.done()) {
+        const auto k = static_cast<std::size_t>(u.get<std::int32_t>());
+        out.loads[k].cells = u.get_vector<std::int64_t>();
+        out.loads[k].loads = u.get_vector<double>();
+        out.loads[k].box = u.get<Box3>();
+      }
+    }
+  }
+
+  // The sweep of pipeline::surface_unions, on the same boxes.
+  Packer pairs;
+  run_collectively(comm, [&] {
+    const std::vector<Box3> box = pipeline::holding_boxes(scene, out.known);
+    std::vector<pipeline::SurfacePair> found;
+    std::int64_t candidate = 0;
+    for (const pipeline::SurfacePair& p : pipeline::surface_union_candidates(scene, box)) {
+      // Who decides: the reader of the first unread STL member, else ranks in turn.
+      int decider = static_cast<int>(candidate++ % ranks);
+      for (const std::int32_t k : {p.a, p.b})
+        if (owner[static_cast<std::size_t>(k)] >= 0) {
+          decider = owner[static_cast<std::size_t>(k)];
+          break;
+        }
+      if (decider != rank) continue;
+      const std::array<std::int32_t, 2> both{p.a, p.b};
+      out.files_read += io::load_stl_surfaces(scene, both, &out.cache);
+      if (geometry::shapes_overlap(scene.inclusions[static_cast<std::size_t>(p.a)].shape,
+                                   scene.inclusions[static_cast<std::size_t>(p.b)].shape, 0))
+        found.push_back(p);
+    }
+    pairs.put_vector(found);
+  });
+  for (const Bytes& bytes : allgather_bytes(comm, pairs.bytes())) {
+    const auto v = Unpacker(bytes).get_vector<pipeline::SurfacePair>();
+    out.unions.insert(out.unions.end(), v.begin(), v.end());
+  }
+  std::sort(out.unions.begin(), out.unions.end());
+  // Triangles stay in the cache only (for the partitions that need them later).
+  for (std::int32_t k : unread)
+    std::get<geometry::StlSurface>(scene.inclusions[static_cast<std::size_t>(k)].shape).triangles.clear();
+  return out;
+}
+
+namespace {
 
 // The dimension's kernel and counters.
 pipeline::Result2 run_kernel(const geometry::Oracle2& oracle, const grid::Lattice2& lattice,
@@ -184,7 +284,7 @@ DistributedMesh<Dim> mesh_distributed(const Comm& comm, const std::string& scene
   const auto start = std::chrono::steady_clock::now();
   geometry::SceneDesc scene;
   // STL triangles are read later, only where needed (README.md, "Reading the scene").
-  run_collectively(comm, [&] { scene = io::read_scene(scene_path, io::ReadSceneOptions{.load_stl = false}); });
+  run_collectively(comm, [&] { scene = io::read_scene(scene_path, io::ReadSceneOptions{.load_stl = false, .probe_stl = false}); });
   const double read_seconds = seconds_since(start);
   DistributedMesh<Dim> out = mesh_distributed<Dim>(comm, std::move(scene), options);
   out.times.add("read", read_seconds);
@@ -210,21 +310,25 @@ DistributedMesh<Dim> mesh_distributed(const Comm& comm, geometry::SceneDesc scen
   out.phases = scene.phases;
   for (int d = 0; d < Dim; ++d) out.domain.min[d] = scene.domain_min[d], out.domain.max[d] = scene.domain_max[d];
   out.scene_inclusions = static_cast<std::int64_t>(scene.inclusions.size());
-  const std::vector<std::int32_t> unread_stl = stl_inclusions(scene);
 
-  // Partition on rank 0 (which reads every STL surface for the loads), broadcast the boxes
-  // and the STL surfaces' bounding boxes.
+  // STL surfaces: each file read by one rank, boxes, loads and same-phase unions shared.
+  StlShares stl;
+  {
+    ScopedPhase timer(&out.times, "read");
+    if constexpr (Dim == 3) stl = share_stl_surfaces(comm, scene, options.partitioning, true);
+    else stl.known.resize(scene.inclusions.size());
+  }
+  const std::vector<Box3>& known = stl.known;
+  const std::vector<pipeline::SurfacePair>& unions = stl.unions;
+
+  // Partition on rank 0, broadcast the boxes.
   std::vector<Box> boxes;
-  std::vector<Box3> known(scene.inclusions.size());
-  std::vector<pipeline::SurfacePair> unions;
   Bytes message;
   {
     ScopedPhase timer(&out.times, "partition");
     run_collectively(comm, [&] {
       if (rank != 0) return;
-      io::load_stl_surfaces(scene, unread_stl);
-      out.stl_files_read += static_cast<std::int64_t>(unread_stl.size());
-      const partition::Partition p = partition::partition_domain(scene, n, options.partitioning);
+      const partition::Partition p = partition::partition_domain(scene, n, options.partitioning, stl.loads);
       Packer pack;
       pack.put_string(p.method);
       std::vector<Box> parts;
@@ -234,22 +338,14 @@ DistributedMesh<Dim> mesh_distributed(const Comm& comm, geometry::SceneDesc scen
                             {part.lattice_max[0], part.lattice_max[1], part.lattice_max[2]},
                             part.load});
       pack.put_vector(parts);
-      std::vector<StlBox> stl;
-      const std::vector<Box3> all = pipeline::holding_boxes(scene);
-      for (std::int32_t k : unread_stl) stl.push_back({k, all[static_cast<std::size_t>(k)]});
-      pack.put_vector(stl);
-      // Same-phase unions involving an STL surface: decided once, where every surface is
-      // read, as the sequential mesher decides them (effective_levels.hpp).
-      if constexpr (Dim == 3) pack.put_vector(pipeline::surface_unions(scene));
       message = pack.take();
     });
+    std::vector<partition::InclusionLoad>().swap(stl.loads);
     message = broadcast_bytes(comm, message);
     run_collectively(comm, [&] {
       Unpacker u(message);
       out.partition_method = u.get_string();
       boxes = u.get_vector<Box>();
-      for (const StlBox& s : u.get_vector<StlBox>()) known[static_cast<std::size_t>(s.inclusion)] = s.box;
-      if constexpr (Dim == 3) unions = u.get_vector<pipeline::SurfacePair>();
       std::sort(boxes.begin(), boxes.end(), [](const Box& a, const Box& b) { return a.id < b.id; });
       if (static_cast<int>(boxes.size()) != n) throw std::logic_error("partition: wrong number of parts");
     });
@@ -278,7 +374,10 @@ DistributedMesh<Dim> mesh_distributed(const Comm& comm, geometry::SceneDesc scen
           box.lo[d] = boxes[static_cast<std::size_t>(p)].lo[d];
           box.hi[d] = boxes[static_cast<std::size_t>(p)].hi[d];
         }
-        regions.push_back(ghost_region<Dim>(index, lattice, box, options.ghost));
+        if constexpr (Dim == 2)
+          regions.push_back(ghost_region<2>(index, lattice, box, options.ghost));
+        else
+          regions.push_back(ghost_region3(index, lattice, box, options.ghost, levels));
         out.loaded_inclusions.insert(out.loaded_inclusions.end(), regions.back().inclusions.begin(),
                                      regions.back().inclusions.end());
       }
@@ -289,18 +388,17 @@ DistributedMesh<Dim> mesh_distributed(const Comm& comm, geometry::SceneDesc scen
   }
 
   // The descriptors this rank needs; the rest of the scene is dropped now. The STL
-  // surfaces among them are read here (rank 0 has them already).
+  // surfaces among them are read here (or taken from the files read above).
   geometry::SceneDesc needed;
   {
     ScopedPhase timer(&out.times, "read");
     run_collectively(comm, [&] {
       needed = subset_scene(scene, out.loaded_inclusions);
       std::vector<geometry::Inclusion>().swap(scene.inclusions);
-      std::vector<std::int32_t> stl;
-      for (std::int32_t k : stl_inclusions(needed)) stl.push_back(k);
-      io::load_stl_surfaces(needed, stl);
-      out.stl_files_read += static_cast<std::int64_t>(stl.size());
+      stl.files_read += io::load_stl_surfaces(needed, stl_inclusions(needed), &stl.cache);
+      io::StlCache().swap(stl.cache);
     });
+    out.stl_files_read = stl.files_read;
   }
 
   // The unchanged sequential kernel on each partition, with an oracle built from exactly

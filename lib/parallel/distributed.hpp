@@ -2,14 +2,16 @@
 // Parallel CISAMR in 2D and 3D (paper Algorithm 2, DESIGN.md §8). Collective over a
 // core::Comm: the same code runs on one process (SerialComm) or under mpiexec (MpiComm).
 //
-//   read      every rank reads the scene file itself (no broadcast); in 3D without the STL
-//             triangles, which are read later, each only by the ranks that need it
+//   read      every rank parses the scene file itself (no broadcast), without opening its
+//             STL files; in 3D each STL file is then read by one rank (round-robin), which
+//             all-gathers its surfaces' boxes, sends their partition loads to rank 0 and
+//             decides their same-phase unions (share_stl_surfaces)
 //   partition rank 0 runs partition::partition_domain, the boxes are broadcast; partition
 //             i goes to the rank whose block of consecutive ids holds it
 //   ghost     per own partition, the ghost region (ghost.hpp): which inclusions, which cells
 //   oracle    per own partition, an Oracle2/Oracle3 from exactly its ghost region's
 //             inclusions (original order kept); the rest of the scene's descriptors is
-//             dropped first
+//             dropped first, and the STL files of the kept ones are read (once per rank)
 //   kernel    pipeline::run2/run3 unchanged on each own partition
 //   merge     nodes merged by lattice identity, owners, global ids (merge.hpp)
 // Every stage ends with an agreement on errors (collective.hpp).
@@ -21,6 +23,7 @@
 #include "core/comm.hpp"
 #include "core/timer.hpp"
 #include "geometry/scene.hpp"
+#include "io/scene_io.hpp"
 #include "parallel/ghost.hpp"
 #include "parallel/merge.hpp"
 #include "partition/partition.hpp"
@@ -47,6 +50,29 @@ struct PartitionSummary {
   double kernel_seconds = 0;      // pipeline::run2 / run3
 };
 
+// What the ranks learn about the STL surfaces whose triangles the scene does not hold
+// (README.md, "Reading the scene").
+struct StlShares {
+  std::vector<Box3> known;                          // per inclusion: its box (STL surfaces; others unset)
+  std::vector<partition::InclusionLoad> loads;      // per inclusion: its partition load (rank 0 only)
+  std::vector<pipeline::SurfacePair> unions;        // = pipeline::surface_unions(scene with every triangle)
+  io::StlCache cache;                               // the files this rank read (path → triangles)
+  std::int64_t files_read = 0;                      // files this rank read
+};
+
+// Collective (3D). Every STL file is read by one rank: files in order of first
+// appearance, file j by rank j mod P. The reader computes its surfaces' boxes
+// (all-gathered) and, with `loads_needed`, their partition loads (gathered on rank 0).
+// Every rank then replays pipeline::surface_unions' sweep over all boxes; a candidate pair
+// with an unread STL member is decided by the reader of its first such member (which
+// reads the other member's file too if it must), other pairs by the ranks in turn; the
+// pairs are all-gathered. The result equals surface_unions of the scene with every
+// triangle read: the same candidate pairs, each decided by the same call on the same
+// arguments in the same order. On return the scene's STL surfaces hold no triangles (the
+// files read are in `cache`). Errors (a file that cannot be read) are collective.
+StlShares share_stl_surfaces(const Comm& comm, geometry::SceneDesc& scene, const partition::PartitionOptions& options,
+                             bool loads_needed);
+
 // Block distribution: rank r meshes partitions [first, last).
 std::array<int, 2> partitions_of_rank(int partitions, int ranks, int rank);
 int rank_of_partition(int partition, int partitions, int ranks);
@@ -64,7 +90,7 @@ struct DistributedMesh {
   std::string partition_method;
   std::vector<PartitionSummary> partitions;     // every partition, by id, on every rank
   std::vector<std::int32_t> loaded_inclusions;  // what this rank's partitions load: scene indices, ascending
-  std::int64_t stl_files_read = 0;  // STL surfaces this rank read (3D; lazy loading)
+  std::int64_t stl_files_read = 0;  // STL files this rank read (3D): its share, then what its partitions need
   KernelStats<Dim> stats;           // counters summed over all partitions of all ranks
   PhaseTimes times;                 // this rank's phase times
 };

@@ -34,7 +34,9 @@ InclusionIndex<Dim>::InclusionIndex(const geometry::SceneDesc& scene, const grid
   inflated_.reserve(scene.inclusions.size());
   double extent_sum = 0, longest = 0;
   for (std::size_t k = 0; k < scene.inclusions.size(); ++k) {
-    const double margin = rule.level_aware ? 4.0 * std::ldexp(h, -scene.inclusions[k].levels) : rule.fixed_cells * h;
+    const double margin = Dim == 3          ? kBoxSlack3 * h
+                          : rule.level_aware ? 4.0 * std::ldexp(h, -scene.inclusions[k].levels)
+                                             : rule.fixed_cells * h;
     Box<Dim> box;
     for (int d = 0; d < Dim; ++d) {
       box.min[d] = boxes[k].min[d] - margin;
@@ -103,13 +105,18 @@ void InclusionIndex<Dim>::query(const Box<Dim>& box, std::vector<std::int32_t>& 
   out.erase(std::unique(out.begin() + static_cast<std::ptrdiff_t>(first), out.end()), out.end());
 }
 
+namespace {
+
+// The box grown by `margin_cells` (the seed), the inclusions whose inflated box meets it,
+// then `rounds` rounds of the closure; the range covers the seed and, with `cover`, every
+// added inclusion's inflated box.
 template <int Dim>
-GhostRegion<Dim> ghost_region(const InclusionIndex<Dim>& index, const grid::Lattice<Dim>& lattice,
-                              const grid::CellRange<Dim>& box, const GhostRule& rule) {
+GhostRegion<Dim> grow(const InclusionIndex<Dim>& index, const grid::Lattice<Dim>& lattice,
+                      const grid::CellRange<Dim>& box, double margin_cells, int rounds, bool cover) {
   const double h = lattice.h;
   GhostRegion<Dim> region;
   region.box = box;
-  const double m = rule.box_margin_cells * h;
+  const double m = margin_cells * h;
   Box<Dim> seed;
   for (int d = 0; d < Dim; ++d) {
     seed.min[d] = lattice.origin[d] + static_cast<double>(box.lo[d]) * h - m;
@@ -124,6 +131,7 @@ GhostRegion<Dim> ghost_region(const InclusionIndex<Dim>& index, const grid::Latt
     if (loaded[static_cast<std::size_t>(k)]) return;
     loaded[static_cast<std::size_t>(k)] = 1;
     queue.push_back(k);
+    if (!cover) return;
     const Box<Dim>& b = index.inflated(k);
     for (int d = 0; d < Dim; ++d) {
       hull.min[d] = std::min(hull.min[d], b.min[d]);
@@ -136,9 +144,9 @@ GhostRegion<Dim> ghost_region(const InclusionIndex<Dim>& index, const grid::Latt
   for (std::size_t q = 0; q < queue.size(); ++q) {
     if (q == round_end) {
       round_end = queue.size();
-      if (++round > rule.max_closure_rounds && rule.max_closure_rounds >= 0) break;
+      if (++round > rounds && rounds >= 0) break;
     }
-    if (rule.max_closure_rounds == 0) break;
+    if (rounds == 0) break;
     found.clear();
     index.query(index.inflated(queue[q]), found);
     for (std::int32_t k : found) add(k);
@@ -157,6 +165,37 @@ GhostRegion<Dim> ghost_region(const InclusionIndex<Dim>& index, const grid::Latt
     region.ghost = static_cast<int>(std::max<std::int64_t>(
         region.ghost, std::max(box.lo[d] - region.range.lo[d], region.range.hi[d] - box.hi[d])));
   }
+  return region;
+}
+
+}  // namespace
+
+int ghost_margin3(int level) {
+  return static_cast<int>(std::ceil(kSamrReach3 + std::ldexp(kKernelReach3, -std::max(0, level)))) + kGhostSafety3;
+}
+
+template <int Dim>
+GhostRegion<Dim> ghost_region(const InclusionIndex<Dim>& index, const grid::Lattice<Dim>& lattice,
+                              const grid::CellRange<Dim>& box, const GhostRule& rule) {
+  return grow<Dim>(index, lattice, box, rule.box_margin_cells, rule.max_closure_rounds, true);
+}
+
+GhostRegion3 ghost_region3(const InclusionIndex3& index, const grid::Lattice<3>& lattice, const grid::CellRange<3>& box,
+                           const GhostRule& rule, std::span<const int> levels) {
+  int margin = static_cast<int>(std::ceil(rule.margin3_cubes));
+  if (margin <= 0) {
+    // The coarsest effective level among the inclusions that could matter at all (the
+    // widest margin); the margin of that level.
+    const GhostRegion3 widest = grow<3>(index, lattice, box, ghost_margin3(0), 0, false);
+    int coarsest = -1;
+    for (std::int32_t k : widest.inclusions) {
+      const int l = levels[static_cast<std::size_t>(k)];
+      coarsest = coarsest < 0 ? l : std::min(coarsest, l);
+    }
+    margin = coarsest < 0 ? 1 : ghost_margin3(coarsest);
+  }
+  GhostRegion3 region = grow<3>(index, lattice, box, margin, rule.max_closure_rounds, rule.max_closure_rounds != 0);
+  region.margin = margin;
   return region;
 }
 

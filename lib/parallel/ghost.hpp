@@ -15,22 +15,52 @@
 
 namespace cisamr::parallel {
 
-// Coarse cells around a partition box that its kernel also meshes, by default. 2D: its
+// Coarse cells around a partition box that its kernel also meshes, by default, in 2D: its
 // cells look one cell (r-adaptivity, hanging nodes) or two cells (rule R4 at level 0)
-// beyond it, and a 2:1 cascade reaches < h: the tests pass with 2, fail with 0. 3D: the
-// same tests pass from 1 cell on, fail with 0; the face swap (decisions on the 12 nodes of
-// two neighbouring cubes) and the snapping guard (a node's neighbours' moves) being added
-// to the 3D kernel reach 2 cells. 4 is twice what any of them needs.
+// beyond it, and a 2:1 cascade reaches < h: the tests pass with 2, fail with 0. 4 is twice
+// what they need.
 inline constexpr double kDefaultGhostCells = 4;
 
+// 3D (README.md, "Ghost region (3D)"): how far a decision about a cell of the box can look
+// beyond the box's face, on data the partition must hold exactly as the whole-domain run
+// holds it.
+//  - SAMR: a refinement that an inclusion outside the region starts (or, missing there,
+//    does not start) travels through touching leaves, by rule B one level coarser per
+//    step, by rule R4 only along the one-cell band of an interface at one level (which the
+//    effective levels keep from carrying a level along an interface): less than
+//    h_{L-1} + Σ_{l<L-1} h_l < 2h, however many sweeps there are.
+//  - the snapping guard (two passes): a node's option depends on the pass-2 refusals of
+//    the leaves around it, which read their vertices' options and pass-1 refusals, which
+//    read the first options of the vertices around those, which read the cut leaves
+//    around them: 3 cells of the level l of the leaves concerned.
+//  - face swapping: a swap of cubes (C, D) must beat every candidate sharing C or D; such
+//    a candidate's value reads the final nodes of cubes up to 2 cells from C: 2 + 3 = 5
+//    cells of level l.
+//  - subdivision: cut points keyed by edges, from their ends' final positions (3 cells).
+inline constexpr double kSamrReach3 = 2;    // coarse cubes
+inline constexpr double kKernelReach3 = 5;  // cells of the level of the leaves that decide
+inline constexpr int kGhostSafety3 = 1;     // coarse cubes on top of the bound
+
+// Coarse cubes of ghost a 3D box needs when the coarsest effective level among the
+// inclusions near it is `level`: ⌈kSamrReach3 + kKernelReach3 / 2^level⌉ + kGhostSafety3
+// (8 at level 0, 6 at level 1, 5 at level 2, 4 from level 3 on).
+int ghost_margin3(int level);
+
 struct GhostRule {
-  // Margin around every inclusion's bounding box. Level-aware (default): 4·h_R, h_R = h/2^R,
-  // R the inclusion's SAMR levels; two inclusions whose inflated boxes do not meet cannot
-  // change each other's refinement. Fixed: `fixed_cells`·h for every inclusion.
+  // 2D: margin around every inclusion's bounding box. Level-aware (default): 4·h_R,
+  // h_R = h/2^R, R the inclusion's SAMR levels; two inclusions whose inflated boxes do not
+  // meet cannot change each other's refinement. Fixed: `fixed_cells`·h for every inclusion.
+  // (3D inflates by kBoxSlack3 only.)
   bool level_aware = true;
   double fixed_cells = 3;
-  // Coarse cells around the box itself (kDefaultGhostCells).
+  // 2D: coarse cells around the box itself (kDefaultGhostCells).
   double box_margin_cells = kDefaultGhostCells;
+  // 3D: coarse cubes around the box, meshed, whose inclusions are all loaded. 0 (default):
+  // ghost_margin3 of the coarsest effective level among the inclusions within
+  // ghost_margin3(0) cubes of the box (1 when there is none); > 0: that many (comparisons,
+  // and the tests that show a too small ghost breaks invariance). In 3D inclusion boxes
+  // are not inflated (level_aware and fixed_cells are 2D rules): the margin covers that.
+  double margin3_cubes = 0;
   // Rounds of the closure "add every inclusion whose inflated box meets an added one's".
   // 0 (default): none. pipeline::effective_levels2/3 settle every level that rule R4 could
   // carry from one inclusion to another before meshing, so what decides a cell lies within
@@ -46,6 +76,11 @@ grid::Lattice<Dim> scene_lattice(const geometry::SceneDesc& scene, const pipelin
 inline grid::Lattice2 scene_lattice2(const geometry::SceneDesc& scene, const pipeline::Options& options) {
   return scene_lattice<2>(scene, options);
 }
+
+// 3D inclusion boxes are inflated by this many coarse cells only: more than the geometry
+// oracle's own boxes exceed the exact ones (relative 1e-12), so an inclusion whose oracle
+// box meets a cube of the region is always loaded.
+inline constexpr double kBoxSlack3 = 1e-6;
 
 // Inflated bounding boxes of all inclusions of a scene in a uniform bucket grid.
 template <int Dim>
@@ -79,6 +114,7 @@ struct GhostRegion {
   grid::CellRange<Dim> box;    // the partition's coarse cells
   grid::CellRange<Dim> range;  // coarse cells whose state decides the box (clipped to the domain)
   int ghost = 0;               // uniform width that covers `range` (what pipeline::run2/run3 take)
+  int margin = 0;              // 3D: the margin it was chosen with (coarse cubes)
   std::vector<std::int32_t> inclusions;  // scene indices, ascending
 };
 using GhostRegion2 = GhostRegion<2>;
@@ -94,6 +130,14 @@ inline GhostRegion2 ghost_region2(const InclusionIndex2& index, const grid::Latt
                                   const grid::CellRange<2>& box, const GhostRule& rule) {
   return ghost_region<2>(index, lattice, box, rule);
 }
+
+// 3D: the coarse cubes of `box` grown by the margin (clipped to the domain) and every
+// inclusion whose box meets them; `levels` are the scene's effective levels
+// (pipeline::effective_levels3, scene order), which choose the margin
+// (GhostRule::margin3_cubes). With closure rounds (a comparison only) the range also
+// covers the added inclusions' boxes, as in 2D.
+GhostRegion3 ghost_region3(const InclusionIndex3& index, const grid::Lattice<3>& lattice, const grid::CellRange<3>& box,
+                           const GhostRule& rule, std::span<const int> levels);
 
 // The scene restricted to `inclusions` (ascending scene indices), original order kept:
 // the oracle's ties go to the lowest index, so relative order must not change.

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
+#include <unordered_map>
 
 #include "core/error.hpp"
 #include "geometry/shapes.hpp"
@@ -19,6 +21,12 @@ class Accumulator {
 
   // Adds `value` at point x (wrapped when periodic, dropped outside the domain otherwise).
   void add_point(Vec3 x, double value) {
+    const std::int64_t c = cell_of(x);
+    if (c >= 0) f_.cells[static_cast<std::size_t>(c)] += value;
+  }
+
+  // The raster cell holding x, -1 outside a non-periodic domain.
+  std::int64_t cell_of(Vec3 x) const {
     std::int64_t idx[3] = {0, 0, 0};
     for (int d = 0; d < f_.dim; ++d) {
       const double L = f_.domain.max[d] - f_.domain.min[d];
@@ -27,11 +35,11 @@ class Accumulator {
         t = std::fmod(t, L);
         if (t < 0) t += L;
       } else if (t < 0 || t > L) {
-        return;
+        return -1;
       }
       idx[d] = std::clamp<std::int64_t>(static_cast<std::int64_t>(std::floor(t / (f_.coarsen * f_.h))), 0, f_.n[d] - 1);
     }
-    f_.cells[idx[0] + f_.n[0] * (idx[1] + f_.n[1] * idx[2])] += value;
+    return idx[0] + f_.n[0] * (idx[1] + f_.n[1] * idx[2]);
   }
 
   // A 2D closed polyline carrying `weight` per unit length; pieces shorter than `spacing`
@@ -153,6 +161,34 @@ std::vector<double> sample_areas(const Shape& shape, const std::vector<Vec3>& pt
   return area;
 }
 
+// An STL surface's samples, summed per raster cell in sample order (cells ascending): what
+// the surface adds to the raster, computable wherever its triangles are (stl_surface_load).
+InclusionLoad stl_load(const Accumulator& acc, const Inclusion& inc, double weight, double spacing) {
+  const auto pts = shape_boundary_samples(inc.shape, spacing);
+  const std::vector<double> area = sample_areas(inc.shape, pts);
+  std::vector<std::pair<std::int64_t, double>> cell_value;
+  std::unordered_map<std::int64_t, std::size_t> slot;
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    const std::int64_t c = acc.cell_of(pts[i]);
+    if (c < 0) continue;
+    const auto [it, inserted] = slot.try_emplace(c, cell_value.size());
+    if (inserted) cell_value.emplace_back(c, 0.0);
+    cell_value[it->second].second += weight * area[i];
+  }
+  std::sort(cell_value.begin(), cell_value.end());
+  InclusionLoad out;
+  for (const auto& [c, v] : cell_value) out.cells.push_back(c), out.loads.push_back(v);
+  return out;
+}
+
+void add_load(LoadField& f, const InclusionLoad& load) {
+  for (std::size_t i = 0; i < load.cells.size(); ++i) {
+    const std::int64_t c = load.cells[i];
+    if (c < 0 || c >= static_cast<std::int64_t>(f.cells.size())) throw std::invalid_argument("inclusion load: cell outside the raster");
+    f.cells[static_cast<std::size_t>(c)] += load.loads[i];
+  }
+}
+
 // Spreads R^M · |A_k| over the raster: the samples of geometry::shape_boundary_samples,
 // weighted so that their total is the exact shape_boundary_measure (circles: exact arcs;
 // cylinders: add_cylinder).
@@ -217,7 +253,10 @@ double LoadField::box_load(const std::array<std::int64_t, 3>& lo, const std::arr
 
 double LoadField::total() const { return box_load({0, 0, 0}, n); }
 
-LoadField build_load_field(const SceneDesc& scene, const PartitionOptions& options) {
+namespace {
+
+// The raster of `scene` (no loads yet) and the sample spacing.
+LoadField empty_field(const SceneDesc& scene, const PartitionOptions& options, double& spacing, bool allocate = true) {
   LoadField f;
   f.dim = scene.dimension;
   f.domain.min = scene.domain_min;
@@ -234,12 +273,46 @@ LoadField build_load_field(const SceneDesc& scene, const PartitionOptions& optio
   while (total / std::pow(double(f.coarsen), f.dim) > double(options.max_load_cells)) ++f.coarsen;
   for (int d = 0; d < 3; ++d)
     f.n[d] = d < f.dim ? (f.lattice_cells[d] + f.coarsen - 1) / f.coarsen : 1;
-  f.cells.assign(static_cast<std::size_t>(f.n[0] * f.n[1] * f.n[2]), 0.0);
-  const double spacing = options.sample_spacing > 0 ? options.sample_spacing : 0.25 * f.coarsen * f.h;
+  if (allocate) f.cells.assign(static_cast<std::size_t>(f.n[0] * f.n[1] * f.n[2]), 0.0);
+  spacing = options.sample_spacing > 0 ? options.sample_spacing : 0.25 * f.coarsen * f.h;
+  return f;
+}
+
+bool stl_without_triangles(const Inclusion& inc) {
+  const auto* s = std::get_if<StlSurface>(&inc.shape);
+  return s != nullptr && s->triangles.empty();
+}
+
+}  // namespace
+
+InclusionLoad stl_surface_load(const SceneDesc& scene, std::int32_t k, const PartitionOptions& options) {
+  double spacing = 0;
+  LoadField f = empty_field(scene, options, spacing, false);  // the raster's shape only
+  const Inclusion& inc = scene.inclusions.at(static_cast<std::size_t>(k));
+  const auto* stl = std::get_if<StlSurface>(&inc.shape);
+  if (stl == nullptr || stl->triangles.empty())
+    throw std::invalid_argument("stl_surface_load: inclusion " + std::to_string(k) + " is no STL surface with triangles");
+  const double weight = std::pow(double(effective_levels(scene, inc)), f.exponent);
+  InclusionLoad out = stl_load(Accumulator(f), inc, weight, spacing);
+  out.box = inclusion_box(inc.shape);
+  return out;
+}
+
+LoadField build_load_field(const SceneDesc& scene, const PartitionOptions& options, std::span<const InclusionLoad> given) {
+  double spacing = 0;
+  LoadField f = empty_field(scene, options, spacing);
   Accumulator acc(f);
-  for (const Inclusion& inc : scene.inclusions) {
+  for (std::size_t k = 0; k < scene.inclusions.size(); ++k) {
+    const Inclusion& inc = scene.inclusions[k];
     const double weight = std::pow(double(effective_levels(scene, inc)), f.exponent);
-    add_inclusion(acc, inc, weight, spacing);
+    if (stl_without_triangles(inc)) {
+      if (k >= given.size()) throw std::invalid_argument("partition: an STL surface without triangles and no load given");
+      add_load(f, given[k]);
+    } else if (std::holds_alternative<StlSurface>(inc.shape)) {
+      add_load(f, stl_load(acc, inc, weight, spacing));  // as stl_surface_load gives it
+    } else {
+      add_inclusion(acc, inc, weight, spacing);
+    }
   }
   const std::int64_t sx = f.n[0] + 1, sy = f.n[1] + 1, sz = f.dim == 3 ? f.n[2] + 1 : 2;
   f.prefix.assign(static_cast<std::size_t>(sx * sy * sz), 0.0);

@@ -4,6 +4,7 @@
 // table answers the load of any lattice-aligned box in O(1). Internal to lib/partition.
 #include <array>
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "core/types.hpp"
@@ -34,7 +35,12 @@ struct LoadField {
   double total() const;
 };
 
-LoadField build_load_field(const geometry::SceneDesc& scene, const PartitionOptions& options);
+// `given`: per inclusion (scene order), the loads of STL surfaces whose triangles the scene
+// does not hold (stl_surface_load, computed where they were read); other entries unused.
+// An STL surface's samples are summed per raster cell before they are added (the same
+// whether computed here or given), so the field does not depend on where they were read.
+LoadField build_load_field(const geometry::SceneDesc& scene, const PartitionOptions& options,
+                           std::span<const InclusionLoad> given = {});
 
 // Levels R_k used for an inclusion (its own, else the scene's; at least 1: an inclusion
 // without refinement still costs its cut elements).

@@ -264,18 +264,20 @@ void bisect(const LoadField& f, const RBox& box, int k, std::vector<RBox>& out) 
   bisect(f, best_b, k2, out);
 }
 
-LoadField checked_field(const geometry::SceneDesc& scene, int n, const PartitionOptions& options) {
+LoadField checked_field(const geometry::SceneDesc& scene, int n, const PartitionOptions& options,
+                        std::span<const InclusionLoad> given = {}) {
   if (n < 1) throw InputError(scene.source, "n", "the number of partitions must be at least 1");
   if (scene.dimension != 2 && scene.dimension != 3)
     throw InputError(scene.source, "dimension", "must be 2 or 3");
-  LoadField f = build_load_field(scene, options);
+  LoadField f = build_load_field(scene, options, given);
   if (f.n[0] * f.n[1] * f.n[2] < n)
     throw InputError(scene.source, "n", "more partitions (" + std::to_string(n) + ") than lattice cells");
   return f;
 }
 
 // Boxes → Partition: ids ordered by (z, y, x) of the min corner, neighbours, inclusions.
-Partition assemble(const LoadField& f, const geometry::SceneDesc& scene, std::vector<RBox> boxes, std::string method) {
+Partition assemble(const LoadField& f, const geometry::SceneDesc& scene, std::vector<RBox> boxes, std::string method,
+                   std::span<const InclusionLoad> given = {}) {
   std::sort(boxes.begin(), boxes.end(), [](const RBox& a, const RBox& b) {
     return std::tie(a.lo[2], a.lo[1], a.lo[0]) < std::tie(b.lo[2], b.lo[1], b.lo[0]);
   });
@@ -352,7 +354,9 @@ Partition assemble(const LoadField& f, const geometry::SceneDesc& scene, std::ve
     });
   // Inclusions whose bounding box (or a periodic image of it) meets the closed part box.
   for (std::size_t k = 0; k < scene.inclusions.size(); ++k) {
-    const Box3 b = inclusion_box(scene.inclusions[k].shape);
+    const auto* stl = std::get_if<geometry::StlSurface>(&scene.inclusions[k].shape);
+    const Box3 b = stl != nullptr && stl->triangles.empty() && k < given.size() ? given[k].box
+                                                                                  : inclusion_box(scene.inclusions[k].shape);
     for (auto& part : p.parts) {
       bool hit = false;
       for (int sx = -1; sx <= 1 && !hit; ++sx)
@@ -438,7 +442,12 @@ double total_load(const geometry::SceneDesc& scene, const PartitionOptions& opti
 }
 
 Partition partition_domain(const geometry::SceneDesc& scene, int n, const PartitionOptions& options) {
-  const LoadField f = checked_field(scene, n, options);
+  return partition_domain(scene, n, options, {});
+}
+
+Partition partition_domain(const geometry::SceneDesc& scene, int n, const PartitionOptions& options,
+                           std::span<const InclusionLoad> given) {
+  const LoadField f = checked_field(scene, n, options, given);
   auto leaves_at = [&](int depth) {
     Index3 l{1, 1, 1};
     for (int d = 0; d < f.dim; ++d) l[d] = std::min<std::int64_t>(std::int64_t{1} << depth, f.n[d]);
@@ -498,7 +507,7 @@ Partition partition_domain(const geometry::SceneDesc& scene, int n, const Partit
     method = "bisection";
   }
   if (!best) consider(uniform_boxes(f, n), {0, 0, 0}, 0);
-  Partition p = assemble(f, scene, std::move(best->boxes), method);
+  Partition p = assemble(f, scene, std::move(best->boxes), method, given);
   p.leaves = {static_cast<int>(best->leaves[0]), static_cast<int>(best->leaves[1]), static_cast<int>(best->leaves[2])};
   p.merges = best->merges;
   p.rebalance_moves = best->moves;

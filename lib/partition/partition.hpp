@@ -4,6 +4,7 @@
 // for the PARTS.json format that to_json writes (the parallel mesher reads it).
 #include <array>
 #include <cstdint>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -71,6 +72,24 @@ struct Partition {
 // Method::best also load-weighted recursive bisection, keeping the better result. Throws
 // InputError when n < 1 or the lattice has fewer cells than n.
 Partition partition_domain(const geometry::SceneDesc& scene, int n, const PartitionOptions& options = {});
+
+// The load an STL surface adds to the load raster of `scene` (its boundary samples summed
+// per raster cell): raster cells (ascending) and their loads. It needs the surface's
+// triangles, nothing else of the scene but its header: the parallel mesher computes it on
+// the rank that read the file and partitions on another (partition_domain with `given`).
+struct InclusionLoad {
+  std::vector<std::int64_t> cells;
+  std::vector<double> loads;
+  Box3 box{};  // the surface's bounding box (Part::inclusions)
+};
+InclusionLoad stl_surface_load(const geometry::SceneDesc& scene, std::int32_t inclusion,
+                               const PartitionOptions& options = {});
+
+// partition_domain for a scene whose STL surfaces need not hold their triangles: the load
+// of such a surface k is given[k] (`given` indexed by inclusion, other entries unused).
+// The same partition as with every triangle present.
+Partition partition_domain(const geometry::SceneDesc& scene, int n, const PartitionOptions& options,
+                           std::span<const InclusionLoad> given);
 
 // The baseline: a g_x × g_y (× g_z) grid with Π g = n, factors chosen to make the boxes as
 // cubic as possible, faces on the lattice; loads computed the same way.

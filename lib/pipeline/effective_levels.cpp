@@ -175,8 +175,7 @@ std::vector<Box3> holding_boxes(const geometry::SceneDesc& scene, std::span<cons
   return out;
 }
 
-std::vector<SurfacePair> surface_unions(const geometry::SceneDesc& scene) {
-  const std::vector<Box3> box = holding_boxes(scene);
+std::vector<SurfacePair> surface_union_candidates(const geometry::SceneDesc& scene, std::span<const Box3> box) {
   std::vector<SurfacePair> out;
   // Sorted boxes along x: a sweep finds the pairs whose boxes meet.
   std::vector<std::int32_t> order(scene.inclusions.size());
@@ -193,10 +192,19 @@ std::vector<SurfacePair> surface_unions(const geometry::SceneDesc& scene) {
       const auto& y = scene.inclusions[b];
       if (x.phase != y.phase || !(by_box(x.shape) || by_box(y.shape))) continue;
       if (!boxes_overlap(box[a], box[b])) continue;
-      if (geometry::shapes_overlap(x.shape, y.shape, 0))
-        out.push_back({static_cast<std::int32_t>(std::min(a, b)), static_cast<std::int32_t>(std::max(a, b))});
+      out.push_back({static_cast<std::int32_t>(std::min(a, b)), static_cast<std::int32_t>(std::max(a, b))});
     }
   }
+  return out;
+}
+
+std::vector<SurfacePair> surface_unions(const geometry::SceneDesc& scene) {
+  const std::vector<Box3> box = holding_boxes(scene);
+  std::vector<SurfacePair> out;
+  for (const SurfacePair& p : surface_union_candidates(scene, box))
+    if (geometry::shapes_overlap(scene.inclusions[static_cast<std::size_t>(p.a)].shape,
+                                 scene.inclusions[static_cast<std::size_t>(p.b)].shape, 0))
+      out.push_back(p);
   std::sort(out.begin(), out.end());
   return out;
 }

@@ -43,6 +43,11 @@ struct SurfacePair {
 };
 std::vector<SurfacePair> surface_unions(const geometry::SceneDesc& scene);
 
+// The pairs surface_unions asks geometry::shapes_overlap about, in the order it asks:
+// same phase, one of them a surface compared by its box, boxes (holding_boxes' `box`)
+// overlapping. The parallel mesher shares these questions among its ranks.
+std::vector<SurfacePair> surface_union_candidates(const geometry::SceneDesc& scene, std::span<const Box3> box);
+
 // The same in 3D (rules of samr/samr3.hpp): contact below 1.8·h_l (a tet's bounding cube
 // has diagonal √3·h_l), spread below 8 cells of the coarser level (R4's star of a movable
 // node: its vertex's leaves, their 2:1 closure and the next cut leaf's bounding cube).

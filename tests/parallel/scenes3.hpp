@@ -1,12 +1,14 @@
 #pragma once
 // 3D scenes and runs shared by the serial and the MPI tests of lib/parallel.
 #include <cmath>
+#include <cstdint>
 #include <string>
 #include <vector>
 
 #include "core/comm.hpp"
 #include "geometry/oracle3.hpp"
 #include "geometry/scene.hpp"
+#include "io/scene_io.hpp"
 #include "io/stl_io.hpp"
 #include "parallel/checksum.hpp"
 #include "parallel/distributed.hpp"
@@ -17,13 +19,12 @@
 
 namespace cisamr::parallel::testing {
 
-// A small 3D scene (6 x 6 x 4 cubes of 0.25, levels 0: one finer inclusion would raise
-// every level, the spread of effective_levels3 reaches 8 cells; levels are covered by
-// the data example) with inclusions of every analytic shape
-// and an STL surface, spread so that partition corners fall inside some of them: a 3 x 3
-// x 2 grid of spheres, a rotated ellipsoid, a fibre (cylinder) crossing
-// the whole domain, two overlapping same-phase spheres (a union), an octahedron from
-// data/shapes.
+// A small 3D scene (6 x 6 x 4 cubes of 0.25, levels 0) with inclusions of every analytic
+// shape and an STL surface, spread so that partition corners fall inside some of them: a
+// 3 x 3 x 2 grid of spheres, a rotated ellipsoid, a fibre (cylinder) crossing the whole
+// domain, two overlapping same-phase spheres (a union), an octahedron from data/shapes.
+// Its contacts (the STL surface is compared by its box) raise every inclusion to Lmax
+// (effective_levels3): the tests mesh it with extra_levels = 1 (Lmax = 1) to keep it cheap.
 inline geometry::SceneDesc corner_scene3() {
   using namespace geometry;
   SceneDesc s;
@@ -70,24 +71,155 @@ inline geometry::SceneDesc corner_scene3() {
   return s;
 }
 
+// Portable pseudo-random doubles in [0, 1) (splitmix64: the same scene on every platform,
+// unlike std:: distributions).
+class Random3 {
+ public:
+  explicit Random3(std::uint64_t seed) : state_(seed) {}
+  double next() {
+    std::uint64_t z = (state_ += 0x9e3779b97f4a7c15ull);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+    z ^= z >> 31;
+    return static_cast<double>(z >> 11) * 0x1.0p-53;
+  }
+
+ private:
+  std::uint64_t state_;
+};
+
+// Dense random spheres on nx × ny × nz cubes of h = 0.125, every inclusion at `levels`:
+// radii 0.8-2.8 h of two phases, half of them placed next to an earlier one (0.1-0.8 of a
+// cell of the level apart, or overlapping it when of the same phase: unions), the others
+// anywhere; pairs that are no union stay 1.85 cells of the level apart, so the contact rule
+// leaves every level as given (effective_levels3), which keeps the scene cheap while the
+// guard refuses and collapses and face swaps happen everywhere, partition faces and
+// corners included. The first sphere is clipped by a corner of the domain.
+inline geometry::SceneDesc packed_scene3(std::uint64_t seed, int levels, int nx, int ny, int nz, int count) {
+  using namespace geometry;
+  SceneDesc s;
+  s.source = "packed-scene-3d";
+  s.dimension = 3;
+  s.h = 0.125;
+  s.levels = levels;
+  s.domain_min = {0, 0, 0};
+  s.domain_max = {nx * s.h, ny * s.h, nz * s.h};
+  s.phases = {{1, "matrix", false}, {2, "particle", false}, {3, "fibre", false}};
+  Random3 random(seed);
+  const double cell = std::ldexp(s.h, -levels), gap = 1.85 * cell;
+  struct Placed {
+    Vec3 c;
+    double r;
+    int phase;
+  };
+  std::vector<Placed> placed;
+  const auto fits = [&](const Placed& p) {
+    for (const Placed& o : placed) {
+      const double d = std::sqrt((p.c[0] - o.c[0]) * (p.c[0] - o.c[0]) + (p.c[1] - o.c[1]) * (p.c[1] - o.c[1]) +
+                                 (p.c[2] - o.c[2]) * (p.c[2] - o.c[2]));
+      const bool deep_union = p.phase == o.phase && d < p.r + o.r - 0.2 * std::min(p.r, o.r);
+      if (!deep_union && d < p.r + o.r + gap) return false;
+    }
+    return true;
+  };
+  placed.push_back({{s.domain_max[0] - 0.02, s.domain_max[1] - 0.03, 0.04}, 0.22, 2});  // clipped by a corner
+  for (int tries = 0; static_cast<int>(placed.size()) < count && tries < 200 * count; ++tries) {
+    Placed p{{}, (0.8 + 2.0 * random.next()) * s.h, random.next() < 0.5 ? 2 : 3};
+    if (random.next() < 0.5) {
+      const Placed& o = placed[static_cast<std::size_t>(random.next() * static_cast<double>(placed.size()))];
+      const double z = 2 * random.next() - 1, phi = 2 * M_PI * random.next(), rho = std::sqrt(1 - z * z);
+      double d = o.r + p.r + gap + (0.1 + 0.7 * random.next()) * cell;
+      if (p.phase == o.phase && random.next() < 0.4) d = o.r + p.r - 0.35 * std::min(o.r, p.r);  // a union
+      p.c = {o.c[0] + d * rho * std::cos(phi), o.c[1] + d * rho * std::sin(phi), o.c[2] + d * z};
+    } else {
+      for (int a = 0; a < 3; ++a) p.c[a] = s.domain_max[a] * random.next();
+    }
+    if (fits(p)) placed.push_back(p);
+  }
+  for (const Placed& p : placed) s.inclusions.push_back({Sphere{p.c, p.r}, p.phase, levels});
+  return s;
+}
+
+// Contacts, unions, STL surfaces and the domain boundary at levels 0-2 (run with
+// extra_levels = 1: Lmax = 3) on 12 × 12 × 8 cubes of h = 0.125: spheres of two phases
+// touching at one point, a sphere a hundredth of a cell from another of its phase, two
+// overlapping same-phase spheres, an STL octahedron overlapping a same-phase sphere (a
+// union that pipeline::surface_unions decides from the triangles), an STL cube and a
+// torus, spheres clipped by faces, an edge and a corner of the domain. The STL surfaces
+// hold no triangles: the parallel mesher reads their files (run_sequential3 reads them
+// for the whole-domain run).
+inline geometry::SceneDesc contact_scene3() {
+  using namespace geometry;
+  SceneDesc s;
+  s.source = "contact-scene-3d";
+  s.dimension = 3;
+  s.h = 0.125;
+  s.levels = 0;
+  s.domain_min = {0, 0, 0};
+  s.domain_max = {1.5, 1.5, 1.0};
+  s.phases = {{1, "matrix", false}, {2, "particle", false}, {3, "fibre", false}};
+  const auto sphere = [&](Vec3 c, double r, int phase, int levels) { s.inclusions.push_back({Sphere{c, r}, phase, levels}); };
+  const auto stl = [&](const char* name, double scale, Vec3 at, int phase, int levels) {
+    StlSurface t;
+    t.file = std::string(CISAMR_SOURCE_DIR "/data/shapes/") + name;
+    t.scale = scale;
+    t.translate = at;
+    s.inclusions.push_back({t, phase, levels});
+  };
+  // [0], [1]: tangent, different phases (dyadic: the contact is exact), level 0.
+  sphere({0.3125, 0.3125, 0.375}, 0.1875, 2, 0);
+  sphere({0.625, 0.3125, 0.375}, 0.125, 3, 0);
+  // [2]: 0.01 cells from [0], same phase, level 1.
+  sphere({0.3125, 0.3125 + 0.1875 + 0.15 + 0.00125, 0.375}, 0.15, 2, 1);
+  // [3], [4]: a same-phase union, levels 1 and 2.
+  sphere({1.05, 0.35, 0.4}, 0.17, 3, 1);
+  sphere({1.2, 0.45, 0.5}, 0.12, 3, 1);
+  // [5], [6]: an STL octahedron overlapping a sphere of its phase (a union), level 1.
+  stl("octahedron.stl", 0.2, {0.45, 1.05, 0.5}, 2, 1);
+  sphere({0.6, 1.1, 0.55}, 0.1, 2, 1);
+  // [7]: an STL cube, level 0; [8]: a torus, level 2.
+  stl("cube.stl", 0.22, {1.05, 1.0, 0.35}, 2, 0);
+  stl("torus.stl", 0.12, {0.95, 0.9, 0.78}, 3, 1);
+  // [9], [10], [11]: clipped by the face x = 0, the edge y = 0, z = 0, the corner (1.5, 1.5, 1).
+  sphere({0.02, 0.8, 0.45}, 0.14, 3, 0);
+  sphere({0.8, 0.03, 0.02}, 0.16, 2, 1);
+  sphere({1.47, 1.46, 0.97}, 0.2, 2, 0);
+  return s;
+}
+
+// The options the contact scene is meshed with (Lmax = 3).
+inline pipeline::Options contact_options3() {
+  pipeline::Options o;
+  o.extra_levels = 1;
+  return o;
+}
+
+// The scene with every STL surface's triangles read (as the sequential mesher reads it).
+inline geometry::SceneDesc with_triangles(geometry::SceneDesc scene) {
+  std::vector<std::int32_t> all(scene.inclusions.size());
+  for (std::size_t k = 0; k < all.size(); ++k) all[k] = static_cast<std::int32_t>(k);
+  io::load_stl_surfaces(scene, all);
+  return scene;
+}
+
 struct RunOutcome3 {
   bool failed = false;  // the mesher threw (the sequential and parallel runs must agree)
   std::string error;
   mesh::Mesh3 mesh;     // gathered on rank 0 (parallel) or the sequential mesh
   std::uint64_t checksum = 0;
+  pipeline::Stats3 stats;  // sequential: the whole-domain run's counters
   DistributedMesh3 distributed;
 };
 
-// The sequential mesher as mesh3 will be once it asks rule R1 for effective_levels3: the
-// unchanged kernel on the whole domain with the levels the partitions use.
-inline RunOutcome3 run_sequential3(const geometry::SceneDesc& scene) {
+// The sequential mesher (pipeline::mesh3_with_stats, what `cisamr mesh` runs without
+// --partitions), STL files read first.
+inline RunOutcome3 run_sequential3(const geometry::SceneDesc& scene, const pipeline::Options& options = {}) {
   RunOutcome3 out;
   try {
-    const geometry::Oracle3 oracle(scene);
-    const pipeline::Options options;
-    const grid::Lattice3 lattice = pipeline::make_lattice3(oracle, options);
-    const std::vector<int> levels = pipeline::effective_levels3(scene, lattice);
-    out.mesh = pipeline::run3(oracle, lattice, lattice.whole_domain(), 0, options, 0, levels).mesh;
+    const geometry::Oracle3 oracle(with_triangles(scene));
+    pipeline::Result3 r = pipeline::mesh3_with_stats(oracle, options);
+    out.mesh = std::move(r.mesh);
+    out.stats = r.stats;
     out.checksum = mesh_checksum3(out.mesh);
   } catch (const std::exception& e) {
     out.failed = true;
@@ -98,11 +230,12 @@ inline RunOutcome3 run_sequential3(const geometry::SceneDesc& scene) {
 
 // Collective: every rank must call it with the same arguments.
 inline RunOutcome3 run_parallel3(const Comm& comm, const geometry::SceneDesc& scene, int partitions,
-                                 const GhostRule& rule = {}) {
+                                 const GhostRule& rule = {}, const pipeline::Options& pipeline = {}) {
   RunOutcome3 out;
   MeshOptions options;
   options.partitions = partitions;
   options.ghost = rule;
+  options.pipeline = pipeline;
   try {
     out.distributed = mesh3_distributed(comm, scene, options);
     out.checksum = mesh_checksum3(comm, out.distributed.piece.mesh);
@@ -112,6 +245,31 @@ inline RunOutcome3 run_parallel3(const Comm& comm, const geometry::SceneDesc& sc
     out.error = e.what();
   }
   return out;
+}
+
+// The scenes every invariance test runs (serial and MPI), with their options: dense packed
+// spheres at levels 0, 1 and 2, the contact scene (tangent spheres, STL surfaces, unions,
+// the domain boundary), and the corner scene (every analytic shape) at Lmax = 1.
+struct Case3 {
+  std::string name;
+  geometry::SceneDesc scene;
+  pipeline::Options options;
+};
+inline std::vector<Case3> invariance_cases3() {
+  pipeline::Options lmax1;
+  lmax1.extra_levels = 1;
+  return {{"packed-level0", packed_scene3(11, 0, 32, 32, 16, 300), {}},
+          {"packed-level1", packed_scene3(12, 1, 16, 16, 12, 80), {}},
+          {"packed-level2", packed_scene3(13, 2, 10, 10, 8, 30), {}},
+          {"contact", contact_scene3(), contact_options3()},
+          {"corner", corner_scene3(), lmax1}};
+}
+
+// A ghost of `cubes` coarse cubes (too small ones break invariance).
+inline GhostRule margin3(double cubes) {
+  GhostRule rule;
+  rule.margin3_cubes = cubes;
+  return rule;
 }
 
 // Spheres whose inside meets four or more partition boxes: they straddle an edge or a

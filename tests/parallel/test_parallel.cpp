@@ -101,7 +101,9 @@ TEST(GhostRegion, IsTheClosureOfMeetingInflatedBoxes) {
     for (std::int32_t k = 0; k < index.size(); ++k)
       if (in[static_cast<std::size_t>(k)]) expected.push_back(k);
     EXPECT_EQ(region.inclusions, expected);
-    if (level_aware) EXPECT_LT(region.inclusions.size(), scene.inclusions.size());  // not the whole scene
+    if (level_aware) {
+      EXPECT_LT(region.inclusions.size(), scene.inclusions.size());  // not the whole scene
+    }
     for (std::int32_t k : region.inclusions)  // the range covers every loaded inflated box
       for (int d = 0; d < 2; ++d) {
         EXPECT_LE(static_cast<double>(region.range.lo[d]), std::max(0.0, index.inflated(k).min[d]));

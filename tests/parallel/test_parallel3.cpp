@@ -1,7 +1,9 @@
-// lib/parallel in 3D through the serial Comm: effective_levels3, partition invariance for
-// (1 rank, 1 and 7 partitions) against the sequential kernel, the merge of cut nodes, lazy
-// STL reading, a ghost too small to be exact. test_parallel3_mpi.cpp runs the invariance
-// on 2-4 ranks.
+// lib/parallel in 3D through the serial Comm: effective_levels3, the 3D ghost margin,
+// partition invariance for (1 rank, 1, 7 and 64 partitions) against the sequential mesher
+// (pipeline::mesh3_with_stats) on dense scenes where the guard refuses and collapses and
+// face swaps happen near partition faces and corners, a ghost too small to be exact, the
+// merge of cut nodes, the STL files read in shares, and errors in them.
+// test_parallel3_mpi.cpp runs the invariance on 2-4 ranks.
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -10,6 +12,7 @@
 #include "io/scene_io.hpp"
 #include "parallel/collective.hpp"
 #include "parallel/output.hpp"
+#include "partition/partition.hpp"
 #include "scenes3.hpp"
 
 namespace cisamr::parallel {
@@ -50,19 +53,61 @@ TEST(EffectiveLevels3, SpreadCarriesTheFinerLevelToCloseNeighbours) {
   EXPECT_EQ(levels_of(two_spheres(0.55, 2, 1, 2)), (std::vector<int>{1, 2}));
 }
 
-TEST(CornerScene3, IsValid) { EXPECT_NO_THROW(geometry::Oracle3{testing::corner_scene3()}); }
+TEST(Scenes3, AreValid) {
+  for (const auto& c : testing::invariance_cases3()) EXPECT_NO_THROW(geometry::Oracle3{testing::with_triangles(c.scene)}) << c.name;
+}
 
-void expect_invariant3(const geometry::SceneDesc& scene, int partitions) {
-  SCOPED_TRACE(scene.source + ", " + std::to_string(partitions) + " partitions");
-  const testing::RunOutcome3 seq = testing::run_sequential3(scene);
-  const testing::RunOutcome3 par = testing::run_parallel3(kSerial, scene, partitions);
+// ⌈2 + 5/2^l⌉ + 1 coarse cubes, chosen by the coarsest effective level near the box.
+TEST(GhostMargin3, FollowsTheCoarsestLevelNearTheBox) {
+  EXPECT_EQ(ghost_margin3(0), 8);
+  EXPECT_EQ(ghost_margin3(1), 6);
+  EXPECT_EQ(ghost_margin3(2), 5);
+  EXPECT_EQ(ghost_margin3(3), 4);
+  EXPECT_EQ(ghost_margin3(6), 4);
+  geometry::SceneDesc s;
+  s.dimension = 3;
+  s.domain_max = {8, 4, 4};
+  s.h = 0.125;  // 64 x 32 x 32 cubes
+  s.phases = {{1, "m", false}, {2, "a", false}};
+  s.inclusions.push_back({geometry::Sphere{{2.0, 2.0, 2.0}, 0.2}, 2, 2});
+  s.inclusions.push_back({geometry::Sphere{{6.0, 2.0, 2.0}, 0.2}, 2, 0});  // 27 cubes from the box
+  const auto lattice = scene_lattice<3>(s, {});
+  const InclusionIndex3 index(s, lattice, GhostRule{});
+  const grid::CellRange<3> box{{8, 8, 8}, {24, 24, 24}};  // x in [1, 3]
+  std::vector<int> levels{2, 0};
+  GhostRegion3 r = ghost_region3(index, lattice, box, GhostRule{}, levels);
+  EXPECT_EQ(r.margin, 5);
+  EXPECT_EQ(r.ghost, 5);
+  EXPECT_EQ(r.range.lo[0], 3);
+  EXPECT_EQ(r.range.hi[0], 29);
+  EXPECT_EQ(r.inclusions, (std::vector<std::int32_t>{0}));
+  // The level-0 sphere within 8 cubes of the box: its margin, and it is loaded.
+  s.inclusions[1].shape = geometry::Sphere{{3.7, 2.0, 2.0}, 0.2};
+  const InclusionIndex3 near(s, lattice, GhostRule{});
+  r = ghost_region3(near, lattice, box, GhostRule{}, levels);
+  EXPECT_EQ(r.margin, 8);
+  EXPECT_EQ(r.inclusions, (std::vector<std::int32_t>{0, 1}));
+  EXPECT_EQ(r.range.lo[0], 0);  // clipped to the domain
+  // No inclusion near: one cube.
+  const grid::CellRange<3> far{{40, 0, 0}, {44, 4, 4}};
+  r = ghost_region3(near, lattice, far, GhostRule{}, levels);
+  EXPECT_EQ(r.margin, 1);
+  EXPECT_TRUE(r.inclusions.empty());
+  // Forced.
+  EXPECT_EQ(ghost_region3(near, lattice, box, testing::margin3(2), levels).margin, 2);
+}
+
+// The parallel mesh against the sequential one: the same set of elements (bit-equal
+// coordinates, same phase) and checksum, no duplicate or missing node, conforming across
+// partition faces, global ids 0..n-1 once each.
+void expect_invariant3(const testing::RunOutcome3& seq, const testing::RunOutcome3& par, const geometry::SceneDesc& scene) {
   ASSERT_FALSE(seq.failed) << seq.error;
   ASSERT_FALSE(par.failed) << par.error;
   EXPECT_EQ(par.checksum, seq.checksum);
   EXPECT_EQ(mesh_checksum3(par.mesh), seq.checksum);
   EXPECT_TRUE(canonical_tets(par.mesh) == canonical_tets(seq.mesh));
   EXPECT_EQ(par.mesh.cell_count(), seq.mesh.cell_count());
-  EXPECT_EQ(par.mesh.node_count(), seq.mesh.node_count());  // no duplicate, no missing node
+  EXPECT_EQ(par.mesh.node_count(), seq.mesh.node_count());
   testing::expect_conforming3(par.mesh, scene);
   std::vector<char> seen(static_cast<std::size_t>(par.distributed.piece.global_nodes), 0);
   for (GlobalId g : par.distributed.piece.mesh.node_global_id) seen[static_cast<std::size_t>(g)]++;
@@ -71,36 +116,54 @@ void expect_invariant3(const geometry::SceneDesc& scene, int partitions) {
 
 class Invariance3 : public ::testing::TestWithParam<int> {};
 
-TEST_P(Invariance3, CornerScene) { expect_invariant3(testing::corner_scene3(), GetParam()); }
-
-TEST_P(Invariance3, DataExampleAtCoarserH) {
-  geometry::SceneDesc scene = io::read_scene(CISAMR_SOURCE_DIR "/data/examples/spheres3d.json");
-  scene.h = 0.1;
-  expect_invariant3(scene, GetParam());
+TEST_P(Invariance3, DenseScenes) {
+  const int n = GetParam();
+  int straddled = 0;
+  for (const auto& c : testing::invariance_cases3()) {
+    SCOPED_TRACE(c.name + ", " + std::to_string(n) + " partitions");
+    const testing::RunOutcome3 seq = testing::run_sequential3(c.scene, c.options);
+    const testing::RunOutcome3 par = testing::run_parallel3(kSerial, c.scene, n, {}, c.options);
+    expect_invariant3(seq, par, c.scene);
+    // What the scene is for: the guard refuses and collapses, faces are swapped, and with
+    // several partitions inclusions straddle their corners.
+    EXPECT_GT(seq.stats.refused_nodes, 0);
+    EXPECT_GT(seq.stats.collapsed_nodes, 0);
+    EXPECT_GT(seq.stats.face_swaps, 10);
+    straddled += testing::straddled_corners3(par.distributed, c.scene);
+  }
+  if (n > 1) {
+    EXPECT_GE(straddled, 2);  // spheres meeting four or more boxes
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(OneRank, Invariance3, ::testing::Values(1, 7));
 
-TEST(Invariance3, PartitionCornersAreStraddled) {
-  const geometry::SceneDesc scene = testing::corner_scene3();
-  for (int n : {7, 8}) {  // the (1 rank, 7) and (3 ranks, 8) cases
-    const testing::RunOutcome3 par = testing::run_parallel3(kSerial, scene, n);
-    ASSERT_FALSE(par.failed) << par.error;
-    EXPECT_GE(testing::straddled_corners3(par.distributed, scene), 1) << n << " partitions";
-  }
+// 64 small boxes (8 x 8 x 4 cubes and their 8-cube ghosts) on the level-0 scene: most
+// ghost regions end inside the domain, where the kernel's reach is widest.
+TEST(Invariance3, SixtyFourPartitions) {
+  const auto c = testing::invariance_cases3().front();
+  const testing::RunOutcome3 seq = testing::run_sequential3(c.scene, c.options);
+  const testing::RunOutcome3 par = testing::run_parallel3(kSerial, c.scene, 64, {}, c.options);
+  expect_invariant3(seq, par, c.scene);
+  int inside = 0;  // partitions whose ghost region stops short of the domain on some side
+  for (const auto& p : par.distributed.partitions)
+    for (int a = 0; a < 3; ++a)
+      inside += p.lattice_min[a] - p.ghost > 0 || p.lattice_max[a] + p.ghost < (a < 2 ? 32 : 16) ? 1 : 0;
+  EXPECT_GT(inside, 64);
 }
 
-// The tests can fail: with no ghost at all (no box margin, inclusion boxes not inflated)
-// the merged mesh is not the sequential one.
-TEST(Invariance3, NoGhostBreaksIt) {
-  GhostRule none;
-  none.level_aware = false;
-  none.fixed_cells = 0;
-  none.box_margin_cells = 0;
-  const geometry::SceneDesc scene = testing::corner_scene3();
-  const testing::RunOutcome3 seq = testing::run_sequential3(scene);
-  const testing::RunOutcome3 par = testing::run_parallel3(kSerial, scene, 7, none);
-  EXPECT_TRUE(par.failed || par.checksum != seq.checksum);
+// The tests can fail: with a ghost of one cube, SAMR cascades, the guard's and the face
+// swaps' decisions near the faces differ from the whole-domain run's.
+TEST(Invariance3, TooSmallGhostBreaksIt) {
+  for (const auto& c : testing::invariance_cases3()) {
+    if (c.name != "packed-level1" && c.name != "contact") continue;
+    SCOPED_TRACE(c.name);
+    const testing::RunOutcome3 seq = testing::run_sequential3(c.scene, c.options);
+    const testing::RunOutcome3 par = testing::run_parallel3(kSerial, c.scene, 8, testing::margin3(1), c.options);
+    ASSERT_FALSE(seq.failed) << seq.error;
+    // Either the merge catches two partitions placing one node differently, or the meshes differ.
+    EXPECT_TRUE(par.failed || par.checksum != seq.checksum);
+  }
 }
 
 // A merge identity seen twice with different coordinates is a bug, named by its edge.
@@ -136,32 +199,68 @@ TEST(Merge3, DifferentCoordinatesForOneCutNodeAreABug) {
   }
 }
 
-// Lazy STL: read from a scene file, the parallel mesher reads the STL surfaces itself and
-// meshes them like the sequential mesher given every triangle.
-TEST(LazyStl, SceneFileWithStlSurfacesMeshesAsSequential) {
-  const fs::path dir = fs::temp_directory_path() / "cisamr_parallel3_stl";
+// What the STL shares give: every surface's box, the partition loads and the same-phase
+// unions exactly as the sequential mesher computes them from every triangle.
+TEST(StlShares, EqualTheWholeScenesBoxesLoadsAndUnions) {
+  const geometry::SceneDesc lazy = testing::contact_scene3();
+  const geometry::SceneDesc full = testing::with_triangles(lazy);
+  geometry::SceneDesc scene = lazy;
+  const StlShares shares = share_stl_surfaces(kSerial, scene, {}, true);
+  EXPECT_EQ(shares.files_read, 3);  // octahedron, cube, torus: once each
+  const std::vector<pipeline::SurfacePair> unions = pipeline::surface_unions(full);
+  EXPECT_EQ(shares.unions, unions);
+  ASSERT_EQ(unions.size(), 1u);  // the octahedron and the sphere it overlaps
+  EXPECT_EQ(unions[0], (pipeline::SurfacePair{5, 6}));
+  const std::vector<Box3> boxes = pipeline::holding_boxes(full);
+  const std::vector<Box3> known = pipeline::holding_boxes(scene, shares.known);
+  for (std::size_t k = 0; k < boxes.size(); ++k)
+    for (int d = 0; d < 3; ++d) {
+      EXPECT_EQ(known[k].min[d], boxes[k].min[d]);
+      EXPECT_EQ(known[k].max[d], boxes[k].max[d]);
+    }
+  for (const auto& inc : scene.inclusions)
+    if (const auto* s = std::get_if<geometry::StlSurface>(&inc.shape)) {
+      EXPECT_TRUE(s->triangles.empty());
+    }
+  const partition::Partition a = partition::partition_domain(full, 7);
+  const partition::Partition b = partition::partition_domain(scene, 7, {}, shares.loads);
+  ASSERT_EQ(a.parts.size(), b.parts.size());
+  for (std::size_t i = 0; i < a.parts.size(); ++i) {
+    EXPECT_EQ(a.parts[i].lattice_min, b.parts[i].lattice_min);
+    EXPECT_EQ(a.parts[i].lattice_max, b.parts[i].lattice_max);
+    EXPECT_EQ(a.parts[i].load, b.parts[i].load);  // bit for bit
+    EXPECT_EQ(a.parts[i].inclusions, b.parts[i].inclusions);
+  }
+}
+
+std::string write_scene_file(const fs::path& dir, const std::string& stl_a, const std::string& stl_b) {
   fs::create_directories(dir);
   const std::string path = (dir / "stl.json").string();
-  {
-    std::ofstream f(path);
-    f << R"({"format": "cisamr-scene/1", "dimension": 3, "domain": {"min": [0, 0, 0], "max": [3, 1, 1]},
-      "mesh": {"h": 0.125, "levels": 0}, "phases": [{"id": 1, "name": "m"}, {"id": 2, "name": "g"}],
-      "inclusions": [
-        {"shape": "stl", "file": ")" CISAMR_SOURCE_DIR R"(/data/shapes/cube.stl", "scale": 0.3,
-         "translate": [0.2, 0.3, 0.3], "phase": 2},
-        {"shape": "stl", "file": ")" CISAMR_SOURCE_DIR R"(/data/shapes/octahedron.stl", "scale": 0.2,
-         "translate": [2.6, 0.6, 0.6], "phase": 2, "levels": 1}]})";
-  }
-  const geometry::SceneDesc lazy = io::read_scene(path, io::ReadSceneOptions{.load_stl = false});
+  std::ofstream f(path);
+  f << R"({"format": "cisamr-scene/1", "dimension": 3, "domain": {"min": [0, 0, 0], "max": [3, 1, 1]},
+    "mesh": {"h": 0.125, "levels": 0}, "phases": [{"id": 1, "name": "m"}, {"id": 2, "name": "g"}],
+    "inclusions": [
+      {"shape": "stl", "file": ")" << stl_a << R"(", "scale": 0.3, "translate": [0.2, 0.3, 0.3], "phase": 2},
+      {"shape": "stl", "file": ")" << stl_b << R"(", "scale": 0.2, "translate": [2.6, 0.6, 0.6], "phase": 2,
+       "levels": 1}]})";
+  return path;
+}
+
+// Read from a scene file, the parallel mesher reads the STL files itself (each once per
+// rank at most) and meshes as the sequential mesher given every triangle.
+TEST(LazyStl, SceneFileWithStlSurfacesMeshesAsSequential) {
+  const fs::path dir = fs::temp_directory_path() / "cisamr_parallel3_stl";
+  const std::string path =
+      write_scene_file(dir, CISAMR_SOURCE_DIR "/data/shapes/cube.stl", CISAMR_SOURCE_DIR "/data/shapes/octahedron.stl");
+  const geometry::SceneDesc lazy = io::read_scene(path, io::ReadSceneOptions{.load_stl = false, .probe_stl = false});
   for (const auto& inc : lazy.inclusions) EXPECT_TRUE(std::get<geometry::StlSurface>(inc.shape).triangles.empty());
-  const geometry::SceneDesc full = io::read_scene(path);
-  const testing::RunOutcome3 seq = testing::run_sequential3(full);
+  const testing::RunOutcome3 seq = testing::run_sequential3(io::read_scene(path));
   ASSERT_FALSE(seq.failed) << seq.error;
   MeshOptions options;
   options.partitions = 16;
   const DistributedMesh3 dm = mesh3_distributed(kSerial, path, options);
   EXPECT_EQ(mesh_checksum3(dm.piece.mesh), seq.checksum);
-  EXPECT_EQ(dm.stl_files_read, 2);  // rank 0 reads each file once (for the partition loads)
+  EXPECT_EQ(dm.stl_files_read, 2);  // one rank: its share is every file, kept for the kernel
   // The two surfaces are 2 apart: some partition does not load both.
   bool partial = false;
   for (const auto& p : dm.partitions) partial = partial || p.inclusions < 2;
@@ -169,11 +268,48 @@ TEST(LazyStl, SceneFileWithStlSurfacesMeshesAsSequential) {
   fs::remove_all(dir);
 }
 
+// An STL file that cannot be opened or parsed: the same one-line error as the sequential
+// reader's, from whichever rank reads it.
+TEST(LazyStl, BadFilesAreInputErrors) {
+  const fs::path dir = fs::temp_directory_path() / "cisamr_parallel3_badstl";
+  fs::create_directories(dir);
+  {
+    std::ofstream bad(dir / "bad.stl");
+    bad << "solid broken\n  facet normal 0 0 1\n    outer loop\n      vertex 0 0\n";
+  }
+  const std::string good = CISAMR_SOURCE_DIR "/data/shapes/cube.stl";
+  const auto error_of = [&](const std::string& path) {
+    try {
+      MeshOptions options;
+      options.partitions = 3;
+      mesh3_distributed(kSerial, path, options);
+    } catch (const CollectiveInputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  const std::string sequential = [&] {
+    try {
+      io::read_scene(write_scene_file(dir, good, (dir / "bad.stl").string()));
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  }();
+  EXPECT_NE(sequential.find("bad.stl"), std::string::npos) << sequential;
+  EXPECT_EQ(error_of(write_scene_file(dir, good, (dir / "bad.stl").string())), sequential);
+  const std::string missing = error_of(write_scene_file(dir, good, (dir / "missing.stl").string()));
+  EXPECT_NE(missing.find("inclusions[1].file: cannot read"), std::string::npos) << missing;
+  EXPECT_NE(missing.find("missing.stl"), std::string::npos) << missing;
+  fs::remove_all(dir);
+}
+
 TEST(Output3, PvtuPiecesOfTetrahedra) {
   const fs::path dir = fs::temp_directory_path() / "cisamr_parallel3_pvtu";
   fs::remove_all(dir);
   fs::create_directories(dir);
-  const testing::RunOutcome3 par = testing::run_parallel3(kSerial, testing::corner_scene3(), 3);
+  const auto c = testing::invariance_cases3().back();
+  const testing::RunOutcome3 par = testing::run_parallel3(kSerial, c.scene, 3, {}, c.options);
   ASSERT_FALSE(par.failed) << par.error;
   write_pvtu<3>(kSerial, (dir / "m.pvtu").string(), par.distributed.piece.mesh);
   EXPECT_TRUE(fs::exists(dir / "m.pvtu"));

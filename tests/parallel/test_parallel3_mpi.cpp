@@ -1,16 +1,24 @@
 // lib/parallel in 3D under mpiexec (2, 3 or 4 ranks): partition invariance against the
-// sequential kernel for (ranks, partitions) in {(2,2), (2,5), (3,8), (4,4)}, owned-first
-// global ids equal to the one-rank ones, lazy STL reading per rank, and a failure inside
-// one rank's 3D kernel reaching every rank. Every test reaches every collective on every
-// rank before it checks anything.
+// sequential mesher for (ranks, partitions) in {(2,2), (2,5), (3,8), (4,4)} on the dense
+// scenes of scenes3.hpp, the gathered mesh equal to the one-rank one (global ids
+// included), the STL files read in shares, and failures on one rank (its kernel, an STL
+// file it reads) reaching every rank. Every test reaches every collective on every rank
+// before it checks anything; the sequential and one-rank reference runs are rank 0's only.
 #include <gtest/gtest.h>
 
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+
 #include "parallel/collective.hpp"
+#include "parallel/exchange.hpp"
 #include "parallel/session.hpp"
 #include "scenes3.hpp"
 
 namespace cisamr::parallel {
 namespace {
+
+namespace fs = std::filesystem;
 
 const Comm& comm() { return world(); }
 bool root() { return comm().rank() == 0; }
@@ -24,33 +32,58 @@ std::vector<int> partition_counts() {
   }
 }
 
-TEST(MpiInvariance3, CornerScene) {
-  const geometry::SceneDesc scene = testing::corner_scene3();
-  const testing::RunOutcome3 seq = testing::run_sequential3(scene);
-  ASSERT_FALSE(seq.failed) << seq.error;  // the same on every rank: no collective skipped
-  for (int n : partition_counts()) {
-    SCOPED_TRACE(std::to_string(comm().size()) + " ranks, " + std::to_string(n) + " partitions");
-    const testing::RunOutcome3 par = testing::run_parallel3(comm(), scene, n);
-    const testing::RunOutcome3 one = testing::run_parallel3(SerialComm{}, scene, n);
-    EXPECT_FALSE(par.failed) << par.error;
-    if (par.failed) continue;  // agreed collectively: safe on every rank
-    EXPECT_EQ(par.checksum, seq.checksum);
-    for (std::int32_t p : par.distributed.piece.mesh.cell_partition)
-      EXPECT_EQ(rank_of_partition(p, n, comm().size()), comm().rank());
-    // Global ids depend on the partitions only: the same node has the same id on 1 rank.
-    const auto& piece = par.distributed.piece;
-    EXPECT_EQ(piece.global_nodes, one.distributed.piece.global_nodes);
-    for (std::size_t i = 0; i < piece.mesh.node_count(); ++i) {
-      const auto g = static_cast<std::size_t>(piece.mesh.node_global_id[i]);
-      if (i < static_cast<std::size_t>(piece.owned_nodes) && i > 0) {
-        EXPECT_EQ(piece.mesh.node_global_id[i], piece.mesh.node_global_id[i - 1] + 1);
-      }
-      for (int d = 0; d < 3; ++d) EXPECT_EQ(piece.mesh.coords[3 * i + d], one.distributed.piece.mesh.coords[3 * g + d]);
+// Rank 0's value on every rank.
+std::uint64_t from_root(std::uint64_t v) { return allreduce_sum_u64(comm(), root() ? v : 0); }
+
+TEST(MpiInvariance3, DenseScenes) {
+  for (const auto& c : testing::invariance_cases3()) {
+    const testing::RunOutcome3 seq = root() ? testing::run_sequential3(c.scene, c.options) : testing::RunOutcome3{};
+    if (root()) {
+      EXPECT_FALSE(seq.failed) << c.name << ": " << seq.error;  // no ASSERT: every rank goes on
     }
-    if (!root()) continue;
-    EXPECT_TRUE(canonical_tets(par.mesh) == canonical_tets(seq.mesh));
-    EXPECT_EQ(par.mesh.node_count(), seq.mesh.node_count());
-    testing::expect_conforming3(par.mesh, scene);
+    const std::uint64_t expected = from_root(seq.checksum);
+    for (int n : partition_counts()) {
+      SCOPED_TRACE(c.name + ", " + std::to_string(comm().size()) + " ranks, " + std::to_string(n) + " partitions");
+      const testing::RunOutcome3 par = testing::run_parallel3(comm(), c.scene, n, {}, c.options);
+      EXPECT_FALSE(par.failed) << par.error;
+      if (par.failed) continue;  // agreed collectively: safe on every rank
+      EXPECT_EQ(par.checksum, expected);
+      for (std::int32_t p : par.distributed.piece.mesh.cell_partition)
+        EXPECT_EQ(rank_of_partition(p, n, comm().size()), comm().rank());
+      // Owned nodes first, numbered contiguously.
+      const auto& piece = par.distributed.piece;
+      for (std::int64_t i = 1; i < piece.owned_nodes; ++i)
+        EXPECT_EQ(piece.mesh.node_global_id[static_cast<std::size_t>(i)],
+                  piece.mesh.node_global_id[static_cast<std::size_t>(i - 1)] + 1);
+      if (!root()) continue;
+      EXPECT_TRUE(canonical_tets(par.mesh) == canonical_tets(seq.mesh));
+      EXPECT_EQ(par.mesh.node_count(), seq.mesh.node_count());
+      testing::expect_conforming3(par.mesh, c.scene);
+      // Global ids depend on the partitions only: the gathered mesh is the one-rank mesh,
+      // node for node and cell for cell.
+      const testing::RunOutcome3 one = testing::run_parallel3(SerialComm{}, c.scene, n, {}, c.options);
+      EXPECT_TRUE(par.mesh.coords == one.mesh.coords);
+      EXPECT_TRUE(par.mesh.cell_nodes == one.mesh.cell_nodes);
+      EXPECT_TRUE(par.mesh.cell_phase == one.mesh.cell_phase);
+    }
+  }
+}
+
+// Each STL file is read by one rank for the boxes, loads and unions; the result is the
+// whole scene's.
+TEST(MpiStl3, EachFileReadOnceForTheShares) {
+  geometry::SceneDesc scene = testing::contact_scene3();
+  const StlShares shares = share_stl_surfaces(comm(), scene, {}, true);
+  EXPECT_EQ(comm().allreduce_sum(shares.files_read), 3);  // octahedron, cube, torus
+  EXPECT_LE(shares.files_read, 2);
+  if (root()) {
+    const geometry::SceneDesc full = testing::with_triangles(testing::contact_scene3());
+    EXPECT_EQ(shares.unions, pipeline::surface_unions(full));
+    const std::vector<Box3> boxes = pipeline::holding_boxes(full);
+    const std::vector<Box3> known = pipeline::holding_boxes(scene, shares.known);
+    for (std::size_t k = 0; k < boxes.size(); ++k) EXPECT_EQ(std::memcmp(&known[k], &boxes[k], sizeof(Box3)), 0) << k;
+  } else {
+    EXPECT_EQ(shares.unions.size(), 1u);
   }
 }
 
@@ -64,6 +97,27 @@ TEST(MpiFailure3, OneRanksKernelFailsEveryRankThrowsIt) {
   EXPECT_NE(par.error.find("inclusions[17]"), std::string::npos) << par.error;
   EXPECT_NE(par.error.find("inclusions[22]"), std::string::npos) << par.error;
   EXPECT_EQ(comm().allreduce_sum(std::int64_t{1}), comm().size());  // still in step
+}
+
+// A malformed STL file, read by one rank only (its share): every rank throws the reader's
+// message naming the file.
+TEST(MpiFailure3, OneRankReadsABadStlEveryRankThrowsIt) {
+  const fs::path dir = fs::temp_directory_path() / ("cisamr_mpi3_badstl_" + std::to_string(comm().rank()));
+  fs::create_directories(dir);
+  {
+    std::ofstream bad(dir / "bad.stl");
+    bad << "solid broken\n  facet normal 0 0 1\n    outer loop\n      vertex 0 0\n";
+  }
+  geometry::SceneDesc scene = testing::contact_scene3();
+  // The third file (the torus, read by rank 2 % P) is replaced by the bad one.
+  std::get<geometry::StlSurface>(scene.inclusions[8].shape).file = (dir / "bad.stl").string();
+  const testing::RunOutcome3 par = testing::run_parallel3(comm(), scene, comm().size(), {}, testing::contact_options3());
+  EXPECT_TRUE(par.failed);
+  EXPECT_NE(par.error.find("bad.stl"), std::string::npos) << par.error;
+  // The same text on every rank.
+  const std::uint64_t mine = std::hash<std::string>{}(par.error);
+  EXPECT_EQ(comm().allreduce_max(static_cast<std::int64_t>(mine >> 1)), static_cast<std::int64_t>(mine >> 1));
+  fs::remove_all(dir);
 }
 
 }  // namespace
