@@ -194,12 +194,18 @@ TEST(Compare3, BothMeshersMeasuredInChildProcesses) {
     ASSERT_EQ(r->phases.size(), 3u);
     EXPECT_NEAR(r->phases[0].exact, 1 - sphere_volume(0.2) - sphere_volume(0.15), 1e-12);
   }
-  EXPECT_GT(c.tetgen_pilot_tets, 0);
-  EXPECT_LT(c.tetgen_pilot_tets, c.tetgen.tets);
-  EXPECT_GT(c.tetgen_pilot2_tets, c.tetgen_pilot_tets);
-  // -a chosen to match our count: within 25 % after the pilots.
+  // -a matched to our count by measured runs: the reported run is the last one, within
+  // the tolerance (or the closest after match_runs runs).
+  ASSERT_FALSE(c.tetgen_matching.empty());
+  EXPECT_LE(static_cast<int>(c.tetgen_matching.size()), options.match_runs);
   EXPECT_GT(c.tetgen.tets, c.ours.tets * 3 / 4);
   EXPECT_LT(c.tetgen.tets, c.ours.tets * 5 / 4);
+  std::int64_t closest = c.tetgen_matching[0].tets;
+  for (const MatchingRun& m : c.tetgen_matching)
+    if (std::abs(m.tets - c.ours.tets) < std::abs(closest - c.ours.tets)) closest = m.tets;
+  EXPECT_EQ(c.tetgen.tets, closest);
+  ASSERT_EQ(c.ours.run_seconds.size(), 1u);
+  ASSERT_EQ(c.tetgen.run_seconds.size(), 1u);
   EXPECT_NE(comparison_table(c).find("TetGen"), std::string::npos);
   EXPECT_NE(comparison_json(c).find("\"cisamr-compare/1\""), std::string::npos);
 }

@@ -3,10 +3,14 @@
 // tets/s, peak memory (each mesher in a forked child), bytes per tet, volume errors,
 // aspect-ratio distribution, dihedral angles, conformity; the time ratio TetGen / ours.
 //
-//   build/bin/bench_mesh3 [--scene FILE.json] [--h H] [--levels L] [--json OUT.json]
-//                         [--tetgen-max-volume A] [--pilots 0|1|2] [--surface-edge E]
-//                         [--no-tetgen] [--no-fork] [--no-conformity]
+//   build-val/bin/bench_mesh3 [--scene FILE.json] [--h H] [--levels L] [--json OUT.json]
+//                             [--repeat N] [--tetgen-max-volume A] [--match-runs K]
+//                             [--match-tolerance T] [--surface-edge E]
+//                             [--extra-levels E] [--no-tetgen] [--no-fork] [--no-conformity]
 // Default scene: data/bench/spheres300.json (300 spheres, r 0.03-0.06, unit cube).
+// --repeat N: N timed runs of each mesher, each in a fresh child; the median is reported.
+// Without --tetgen-max-volume, TetGen's -a is matched to our count by up to K measured runs
+// (default 4) until within T (default 0.05); the table prints the -a to reuse.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -24,7 +28,8 @@ using namespace cisamr;
 int main(int argc, char** argv) {
   std::string scene_file = std::string(CISAMR_SOURCE_DIR) + "/data/bench/spheres300.json", json_file;
   double h = 0, max_volume = 0, surface_edge = 0;
-  int pilots = -1;
+  int match_runs = -1, repeats = 1;
+  double match_tolerance = -1;
   int levels = -1;
   tetgen_ref::CompareOptions options;
   for (int i = 1; i < argc; ++i) {
@@ -35,7 +40,10 @@ int main(int argc, char** argv) {
     else if (a == "--levels" && has_value) levels = std::atoi(argv[++i]);
     else if (a == "--json" && has_value) json_file = argv[++i];
     else if (a == "--tetgen-max-volume" && has_value) max_volume = std::atof(argv[++i]);
-    else if (a == "--pilots" && has_value) pilots = std::atoi(argv[++i]);
+    else if (a == "--match-runs" && has_value) match_runs = std::atoi(argv[++i]);
+    else if (a == "--match-tolerance" && has_value) match_tolerance = std::atof(argv[++i]);
+    else if (a == "--extra-levels" && has_value) options.cisamr.extra_levels = std::atoi(argv[++i]);
+    else if (a == "--repeat" && has_value) repeats = std::max(1, std::atoi(argv[++i]));
     else if (a == "--surface-edge" && has_value) surface_edge = std::atof(argv[++i]);
     else if (a == "--no-tetgen") options.run_tetgen = false;
     else if (a == "--no-fork") options.isolate = false;
@@ -58,7 +66,9 @@ int main(int argc, char** argv) {
     }
     options.tetgen.max_volume = max_volume;
     options.tetgen.surface_edge = surface_edge;
-    if (pilots >= 0) options.pilots = pilots;
+    if (match_runs > 0) options.match_runs = match_runs;
+    if (match_tolerance > 0) options.match_tolerance = match_tolerance;
+    options.repeats = repeats;
     options.progress = [](const std::string& what) { std::fprintf(stderr, "bench_mesh3: %s\n", what.c_str()); };
     const tetgen_ref::Comparison c = tetgen_ref::compare3(scene, options);
     std::fputs(tetgen_ref::comparison_table(c).c_str(), stdout);

@@ -124,6 +124,9 @@ Json to_json(const MesherReport& r) {
           {"cpu_seconds", r.cpu_seconds},
           {"phase_seconds", phase_seconds},
           {"tets_per_second", r.tets_per_second},
+          {"run_seconds", r.run_seconds},
+          {"run_cpu_seconds", r.run_cpu_seconds},
+          {"runs_differ", r.runs_differ},
           {"peak_rss_delta_bytes", r.peak_rss_delta_bytes},
           {"bytes_per_tet", r.bytes_per_tet},
           {"isolated", r.isolated},
@@ -150,6 +153,9 @@ MesherReport from_json(const Json& j) {
   r.cpu_seconds = j.at("cpu_seconds");
   for (const Json& p : j.at("phase_seconds")) r.phase_seconds.emplace_back(p[0], p[1]);
   r.tets_per_second = j.at("tets_per_second");
+  r.run_seconds = j.at("run_seconds").get<std::vector<double>>();
+  r.run_cpu_seconds = j.at("run_cpu_seconds").get<std::vector<double>>();
+  r.runs_differ = j.at("runs_differ");
   r.peak_rss_delta_bytes = j.at("peak_rss_delta_bytes");
   r.bytes_per_tet = j.at("bytes_per_tet");
   r.isolated = j.at("isolated");
@@ -278,6 +284,12 @@ std::string percent(double relative) {
   return text;
 }
 
+double extra_value(const MesherReport& r, const std::string& name) {
+  for (const auto& [n, v] : r.extra)
+    if (n == name) return v;
+  return 0;
+}
+
 std::string bin_label(std::size_t b) {
   char text[32];
   if (b + 1 < kAspectBinLower.size())
@@ -387,6 +399,29 @@ MesherReport measure_mesh(const mesh::Mesh3& m, const geometry::SceneDesc& scene
   return r;
 }
 
+namespace {
+
+// Runs `measured` (one timed run in its own child when isolated) `repeats` times and keeps
+// the run with the median wall time, listing every run's wall and CPU time.
+template <class Measured>
+MesherReport median_run(const CompareOptions& options, int repeats, std::vector<MesherReport> done, Measured&& measured) {
+  while (static_cast<int>(done.size()) < std::max(1, repeats)) done.push_back(run_maybe_isolated(options.isolate, measured));
+  std::vector<std::size_t> order(done.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return done[a].seconds < done[b].seconds; });
+  MesherReport r = done[order[(order.size() - 1) / 2]];
+  r.run_seconds.clear();
+  r.run_cpu_seconds.clear();
+  for (const MesherReport& run : done) {
+    r.run_seconds.push_back(run.seconds);
+    r.run_cpu_seconds.push_back(run.cpu_seconds);
+    if (run.tets != r.tets || run.nodes != r.nodes) r.runs_differ = true;
+  }
+  return r;
+}
+
+}  // namespace
+
 Comparison compare3(const geometry::SceneDesc& scene, const CompareOptions& options) {
   check_tetgen_scene(scene);  // fail on bad input before any meshing
   Comparison c;
@@ -395,8 +430,7 @@ Comparison compare3(const geometry::SceneDesc& scene, const CompareOptions& opti
   c.h = scene.h;
   c.levels = finest_levels(scene);
 
-  say(options, "meshing with cisamr");
-  c.ours = run_maybe_isolated(options.isolate, [&] {
+  const auto ours_once = [&] {
     MemoryProbe memory;
     memory.start();
     const double cpu_start = cpu_seconds_now();
@@ -422,79 +456,105 @@ Comparison compare3(const geometry::SceneDesc& scene, const CompareOptions& opti
     const pipeline::Stats3& s = result.stats;
     r.extra = {{"leaves", double(s.leaves)},          {"cut_tets", double(s.cut_tets)},
                {"snapped_nodes", double(s.snapped_nodes)}, {"face_swaps", double(s.face_swaps)},
+               {"collapsed_nodes", double(s.collapsed_nodes)}, {"refused_nodes", double(s.refused_nodes)},
                {"inverted", double(s.inverted)},      {"unresolved", double(s.unresolved)},
                {"worst_kept", s.worst_kept},          {"worst_split", s.worst_split},
                {"worst_closure", s.worst_closure},    {"max_level", double(s.max_level)}};
     return r;
-  });
+  };
+  say(options, "meshing with cisamr" + std::string(options.repeats > 1 ? " (" + std::to_string(options.repeats) + " runs)" : ""));
+  c.ours = median_run(options, options.repeats, {}, ours_once);
   if (!options.run_tetgen) return c;
   c.has_tetgen = true;
 
-  // TetGen's volume bound: given, or matched to our count (compare3.hpp: N0 + V/(f·a)).
-  double meshed_volume = total_volume(scene);
-  for (std::size_t p = 0; p < scene.phases.size(); ++p)
-    if (scene.phases[p].is_void)
-      for (const auto& inc : scene.inclusions)
-        if (inc.phase == scene.phases[p].id) meshed_volume -= exact_volume(inc.shape);
-  TetgenOptions tetgen = options.tetgen;
-  if (!(tetgen.max_volume > 0)) {
-    const double target = std::max<double>(1, static_cast<double>(c.ours.tets));
-    const auto count_tets = [&](double max_volume) {
-      TetgenOptions pilot = tetgen;
-      pilot.max_volume = max_volume;
-      return run_maybe_isolated(options.isolate, [&] {
-               MesherReport r;
-               r.tets = static_cast<std::int64_t>(mesh_scene_with_tetgen(scene, pilot).mesh.cell_count());
-               return r;
-             }).tets;
+  const auto tetgen_once = [&](double max_volume) {
+    return [&options, &scene, max_volume] {
+      MemoryProbe memory;
+      memory.start();
+      TetgenOptions run = options.tetgen;
+      run.max_volume = max_volume;
+      run.on_tetrahedralized = [&memory] { memory.stop(); };
+      const double cpu_start = cpu_seconds_now();
+      const auto start = std::chrono::steady_clock::now();
+      TetgenMesh t = mesh_scene_with_tetgen(scene, run);
+      const double seconds = seconds_since(start);
+      const double cpu = cpu_seconds_now() - cpu_start;
+      MesherReport r = measure_mesh(t.mesh, scene, options.check_conformity);
+      r.cpu_seconds = cpu;
+      r.name = "TetGen 1.5";
+      r.settings = "-" + t.switches;
+      r.seconds = seconds;
+      r.tets_per_second = seconds > 0 ? static_cast<double>(r.tets) / seconds : 0;
+      r.phase_seconds = {{"plc", t.plc_seconds}, {"tetrahedralize", t.tetgen_seconds}, {"copy", t.copy_seconds}};
+      r.peak_rss_delta_bytes = memory.delta_bytes();
+      r.bytes_per_tet = r.tets > 0 ? r.peak_rss_delta_bytes / static_cast<double>(r.tets) : 0;
+      r.memory_method = memory.method(options.isolate) + "; read when tetrahedralize returns (before the copy)";
+      r.extra = {{"surface_points", double(t.surface_points)},
+                 {"surface_triangles", double(t.surface_triangles)},
+                 {"max_volume", run.max_volume}};
+      return r;
     };
-    const auto pilot_start = std::chrono::steady_clock::now();
-    double surface_tets = 0, per_inverse_volume = meshed_volume / options.volume_factor;  // N0, C
-    if (options.pilots >= 1) {
-      say(options, "TetGen pilot run without -a (surface-bound count)");
-      c.tetgen_pilot_tets = count_tets(0);
-      surface_tets = static_cast<double>(c.tetgen_pilot_tets);
-    }
-    // When the surfaces alone give about our count or more, ask for a quarter more anyway.
-    const double volume_tets = std::max(target - surface_tets, 0.25 * target);
-    if (options.pilots >= 2) {
-      c.tetgen_pilot_volume = per_inverse_volume / (0.25 * volume_tets);
-      say(options, "TetGen pilot run with -a (volume-bound count)");
-      c.tetgen_pilot2_tets = count_tets(c.tetgen_pilot_volume);
-      const double extra = static_cast<double>(c.tetgen_pilot2_tets) - surface_tets;
-      if (extra > 0) per_inverse_volume = extra * c.tetgen_pilot_volume;
-    }
-    c.tetgen_pilot_seconds = seconds_since(pilot_start);
-    tetgen.max_volume = per_inverse_volume / volume_tets;
-  }
+  };
 
-  say(options, "meshing with TetGen");
-  c.tetgen = run_maybe_isolated(options.isolate, [&] {
-    MemoryProbe memory;
-    memory.start();
-    TetgenOptions run = tetgen;
-    run.on_tetrahedralized = [&memory] { memory.stop(); };
-    const double cpu_start = cpu_seconds_now();
-    const auto start = std::chrono::steady_clock::now();
-    TetgenMesh t = mesh_scene_with_tetgen(scene, run);
-    const double seconds = seconds_since(start);
-    const double cpu = cpu_seconds_now() - cpu_start;
-    MesherReport r = measure_mesh(t.mesh, scene, options.check_conformity);
-    r.cpu_seconds = cpu;
-    r.name = "TetGen 1.5";
-    r.settings = "-" + t.switches;
-    r.seconds = seconds;
-    r.tets_per_second = seconds > 0 ? static_cast<double>(r.tets) / seconds : 0;
-    r.phase_seconds = {{"plc", t.plc_seconds}, {"tetrahedralize", t.tetgen_seconds}, {"copy", t.copy_seconds}};
-    r.peak_rss_delta_bytes = memory.delta_bytes();
-    r.bytes_per_tet = r.tets > 0 ? r.peak_rss_delta_bytes / static_cast<double>(r.tets) : 0;
-    r.memory_method = memory.method(options.isolate) + "; read when tetrahedralize returns (before the copy)";
-    r.extra = {{"surface_points", double(t.surface_points)},
-               {"surface_triangles", double(t.surface_triangles)},
-               {"max_volume", run.max_volume}};
-    return r;
-  });
+  if (options.tetgen.max_volume > 0) {
+    say(options, "meshing with TetGen");
+    c.tetgen = median_run(options, options.repeats, {}, tetgen_once(options.tetgen.max_volume));
+  } else {
+    // -a matched to our count by measured runs (compare3.hpp): volume model, then the
+    // secant in log-log space; the run closest to our count is reported.
+    double meshed_volume = total_volume(scene);
+    for (std::size_t p = 0; p < scene.phases.size(); ++p)
+      if (scene.phases[p].is_void)
+        for (const auto& inc : scene.inclusions)
+          if (inc.phase == scene.phases[p].id) meshed_volume -= exact_volume(inc.shape);
+    const double target = std::max<double>(1, static_cast<double>(c.ours.tets));
+    const auto miss = [&](std::int64_t tets) { return std::abs(std::log(std::max<double>(1, double(tets)) / target)); };
+    std::vector<MesherReport> runs;
+    double a = options.volume_factor * meshed_volume / target;
+    for (int k = 0; k < std::max(1, options.match_runs); ++k) {
+      say(options, "meshing with TetGen, -a" + fixed(a, 12) + (k == 0 ? " (matching our count)" : ""));
+      runs.push_back(run_maybe_isolated(options.isolate, tetgen_once(a)));
+      c.tetgen_matching.push_back({a, runs.back().tets, runs.back().seconds});
+      if (miss(runs.back().tets) <= std::log1p(options.match_tolerance)) break;
+      // Next a. Once runs lie on both sides of N: interpolate in log-log space between the
+      // closest run above and the closest below (TetGen's count jumps with a, so keep the
+      // bracket rather than the last two runs). Before: count ∝ a^-slope, the slope from
+      // the last two runs (clamped), else the prior.
+      const MatchingRun* above = nullptr;
+      const MatchingRun* below = nullptr;
+      for (const MatchingRun& m : c.tetgen_matching) {
+        if (double(m.tets) > target && (above == nullptr || m.tets < above->tets)) above = &m;
+        if (double(m.tets) < target && (below == nullptr || m.tets > below->tets)) below = &m;
+      }
+      if (above != nullptr && below != nullptr) {
+        const double la = std::log(above->max_volume), lb = std::log(below->max_volume);
+        const double na = std::log(double(above->tets)), nb = std::log(double(std::max<std::int64_t>(1, below->tets)));
+        double t = (na - std::log(target)) / (na - nb);
+        t = std::isfinite(t) ? std::clamp(t, 0.1, 0.9) : 0.5;  // keep inside the bracket
+        a = std::exp(la + t * (lb - la));
+        continue;
+      }
+      double slope = options.initial_slope;
+      if (runs.size() >= 2) {
+        const MatchingRun& p = c.tetgen_matching[c.tetgen_matching.size() - 2];
+        const MatchingRun& q = c.tetgen_matching.back();
+        const double measured = -std::log(double(std::max<std::int64_t>(1, q.tets)) / double(std::max<std::int64_t>(1, p.tets))) /
+                                std::log(q.max_volume / p.max_volume);
+        if (std::isfinite(measured)) slope = std::clamp(measured, 0.5, 3.0);
+      }
+      a *= std::pow(double(std::max<std::int64_t>(1, runs.back().tets)) / target, 1.0 / slope);
+    }
+    std::size_t best = 0;
+    for (std::size_t k = 1; k < runs.size(); ++k)
+      if (miss(runs[k].tets) < miss(runs[best].tets)) best = k;
+    for (std::size_t k = 0; k < runs.size(); ++k)
+      if (k != best) c.tetgen_matching_seconds += runs[k].seconds;
+    if (options.repeats > 1) say(options, "TetGen, -a" + fixed(c.tetgen_matching[best].max_volume, 12) + ": " +
+                                              std::to_string(options.repeats) + " timed runs");
+    c.tetgen = median_run(options, options.repeats, {runs[best]}, tetgen_once(c.tetgen_matching[best].max_volume));
+  }
   c.time_ratio = c.ours.seconds > 0 ? c.tetgen.seconds / c.ours.seconds : 0;
+  c.cpu_time_ratio = c.ours.cpu_seconds > 0 ? c.tetgen.cpu_seconds / c.ours.cpu_seconds : 0;
   return c;
 }
 
@@ -533,7 +593,16 @@ std::string comparison_table(const Comparison& c) {
       return std::string("-");
     });
   row("CPU time (s)", [](const MesherReport& r) { return fixed(r.cpu_seconds, 3); });
+  if (c.ours.run_seconds.size() > 1 || c.tetgen.run_seconds.size() > 1)
+    row("runs, wall (s) [median shown]", [](const MesherReport& r) {
+      std::string list;
+      for (double s : r.run_seconds) list += (list.empty() ? "" : " ") + fixed(s, 2);
+      return list;
+    });
   row("tets per second (wall)", [](const MesherReport& r) { return grouped(std::llround(r.tets_per_second)); });
+  row("tets per CPU second", [](const MesherReport& r) {
+    return grouped(r.cpu_seconds > 0 ? std::llround(double(r.tets) / r.cpu_seconds) : 0);
+  });
   row("peak memory increase (MiB)", [](const MesherReport& r) { return fixed(r.peak_rss_delta_bytes / 1048576.0, 1); });
   row("bytes per tet", [](const MesherReport& r) { return fixed(r.bytes_per_tet, 0); });
   row("conforming", [](const MesherReport& r) {
@@ -558,8 +627,21 @@ std::string comparison_table(const Comparison& c) {
   row("dihedral min / max (deg)",
       [](const MesherReport& r) { return fixed(r.min_dihedral_deg, 2) + " / " + fixed(r.max_dihedral_deg, 2); });
   if (c.has_tetgen) {
-    std::snprintf(line, sizeof line, "time ratio TetGen / cisamr: %.2f (wall), %.2f (CPU)\n", c.time_ratio,
-                  c.ours.cpu_seconds > 0 ? c.tetgen.cpu_seconds / c.ours.cpu_seconds : 0.0);
+    std::snprintf(line, sizeof line, "time ratio TetGen / cisamr: %.2f (wall), %.2f (CPU); per tetrahedron: %.2f (wall), %.2f (CPU)\n",
+                  c.time_ratio, c.cpu_time_ratio,
+                  c.tetgen.tets_per_second > 0 ? c.ours.tets_per_second / c.tetgen.tets_per_second : 0.0,
+                  c.tetgen.cpu_seconds > 0 && c.ours.cpu_seconds > 0
+                      ? (double(c.ours.tets) / c.ours.cpu_seconds) / (double(c.tetgen.tets) / c.tetgen.cpu_seconds)
+                      : 0.0);
+    out += line;
+    std::snprintf(line, sizeof line,
+                  "aim (issue 3): > 1,000,000 tets/s on one core and 10x TetGen; now %s tets/s (wall), %s per CPU "
+                  "second, %.1fx TetGen per tet (CPU)\n",
+                  grouped(std::llround(c.ours.tets_per_second)).c_str(),
+                  grouped(c.ours.cpu_seconds > 0 ? std::llround(double(c.ours.tets) / c.ours.cpu_seconds) : 0).c_str(),
+                  c.tetgen.cpu_seconds > 0 && c.ours.cpu_seconds > 0
+                      ? (double(c.ours.tets) / c.ours.cpu_seconds) / (double(c.tetgen.tets) / c.tetgen.cpu_seconds)
+                      : 0.0);
     out += line;
     const double count_ratio = c.ours.tets > 0 ? double(c.tetgen.tets) / double(c.ours.tets) : 0;
     if (count_ratio < 0.8 || count_ratio > 1.25) {
@@ -569,16 +651,27 @@ std::string comparison_table(const Comparison& c) {
                     count_ratio);
       out += line;
     }
-    if (c.tetgen_pilot_tets > 0) {
-      std::snprintf(line, sizeof line, "TetGen -a chosen from pilot runs (%.2f s, not counted): %s tets without -a",
-                    c.tetgen_pilot_seconds, grouped(c.tetgen_pilot_tets).c_str());
-      out += line;
-      if (c.tetgen_pilot2_tets > 0) {
-        std::snprintf(line, sizeof line, ", %s with -a%.4g", grouped(c.tetgen_pilot2_tets).c_str(), c.tetgen_pilot_volume);
+    if (!c.tetgen_matching.empty()) {
+      out += "TetGen -a matched to our count by " + std::to_string(c.tetgen_matching.size()) + " run(s):";
+      for (const MatchingRun& m : c.tetgen_matching) {
+        std::snprintf(line, sizeof line, " -a%.6g -> %s (%.1f s);", m.max_volume, grouped(m.tets).c_str(), m.seconds);
         out += line;
       }
-      out += '\n';
+      std::snprintf(line, sizeof line, " the closest is reported; re-run with --tetgen-max-volume %.9g to skip matching\n",
+                    extra_value(c.tetgen, "max_volume"));
+      out += line;
     }
+  }
+  for (const MesherReport* r : cols)
+    if (r->runs_differ) out += "WARNING: " + r->name + "'s repeated runs gave different meshes (not deterministic)\n";
+  for (const MesherReport* r : cols) {
+    if (r->extra.empty()) continue;
+    out += r->name + ":";
+    for (const auto& [name, v] : r->extra) {
+      std::snprintf(line, sizeof line, " %s %.6g", name.c_str(), v);
+      out += line;
+    }
+    out += "\n";
   }
   out += "memory: " + c.ours.memory_method + "\n";
   return out;
@@ -590,11 +683,13 @@ std::string comparison_json(const Comparison& c) {
             {"cisamr", to_json(c.ours)}};
   if (c.has_tetgen) {
     j["tetgen"] = to_json(c.tetgen);
-    j["tetgen_pilot_seconds"] = c.tetgen_pilot_seconds;
-    j["tetgen_pilot_tets"] = c.tetgen_pilot_tets;
-    j["tetgen_pilot_volume"] = c.tetgen_pilot_volume;
-    j["tetgen_pilot2_tets"] = c.tetgen_pilot2_tets;
+    Json matching = Json::array();
+    for (const MatchingRun& m : c.tetgen_matching)
+      matching.push_back({{"max_volume", m.max_volume}, {"tets", m.tets}, {"seconds", m.seconds}});
+    j["tetgen_matching_runs"] = matching;
+    j["tetgen_matching_seconds"] = c.tetgen_matching_seconds;
     j["time_ratio_tetgen_over_cisamr"] = c.time_ratio;
+    j["cpu_time_ratio_tetgen_over_cisamr"] = c.cpu_time_ratio;
   }
   return j.dump(2) + "\n";
 }

@@ -34,6 +34,10 @@ struct MesherReport {
   double cpu_seconds = 0;  // user + system CPU time of the same call (less sensitive to load)
   std::vector<std::pair<std::string, double>> phase_seconds;
   double tets_per_second = 0;
+  // Every timed run of this mesher (CompareOptions::repeats); seconds/cpu_seconds above
+  // are those of the run with the median wall time.
+  std::vector<double> run_seconds, run_cpu_seconds;
+  bool runs_differ = false;  // repeated runs gave different tetrahedron counts (non-determinism)
   // Memory: peak resident set during the mesher call minus the resident set just before it
   // (Linux VmHWM after resetting it through /proc/self/clear_refs), in a child process
   // when `isolated`. memory_method says exactly what was measured.
@@ -60,17 +64,34 @@ struct MesherReport {
 struct CompareOptions {
   pipeline::Options cisamr;     // our mesher's knobs
   TetgenOptions tetgen;         // max_volume <= 0: chosen to match our tetrahedron count
-  // Choosing TetGen's -a to match our tetrahedron count N: TetGen's count behaves like
-  // N0 + C / a, where N0 (the tets the quality bound puts around the inclusion surfaces)
-  // dominates scenes of many small inclusions. pilots = 2: one run without -a gives N0, one
-  // at a guess (a quarter of the volume tets) gives C; 1: N0 only, C = V / volume_factor;
-  // 0: no pilot, N0 = 0. Pilot runs are not counted in TetGen's time.
-  int pilots = 2;
-  double volume_factor = 2.0;   // first guess: mean volume of a volume-bound TetGen tet ≈ a / 2
+  // Choosing TetGen's -a to match our tetrahedron count N. TetGen's count is not N0 + C/a
+  // (the quality bound refines around the surfaces whatever a is, and -a interacts with
+  // -q: on data/bench/spheres300.json it falls like a^-1.5 to a^-2), so -a is found by measured
+  // runs: a_1 = volume_factor · V / N (V the meshed volume), a_2 from a_1 assuming
+  // count ∝ a^-initial_slope, then the secant through the last two runs in log-log space;
+  // once runs lie on both sides of N, log-log interpolation between the closest run above
+  // and the closest below (the count jumps with a: keep the bracket). Until a count is
+  // within match_tolerance of N or match_runs runs were made. Every run
+  // is a full measured run in its own child; the one closest to N is reported, the others'
+  // time is reported separately (not counted in TetGen's time).
+  int match_runs = 4;
+  double match_tolerance = 0.05;
+  double volume_factor = 3.0;   // count · a / V of TetGen -pq1.4 near 10^6 tets (measured)
+  double initial_slope = 1.25;
+  // Timed runs of each mesher (each in a fresh child): the run with the median wall time is
+  // reported (its phases, memory, CPU time), with every run's wall and CPU time listed.
+  int repeats = 1;
   bool run_tetgen = true;
   bool isolate = true;          // each mesher in a forked child (clean memory figures)
   bool check_conformity = true;
   std::function<void(const std::string&)> progress;  // optional; called in the parent
+};
+
+// One TetGen run made while matching -a to our count.
+struct MatchingRun {
+  double max_volume = 0;
+  std::int64_t tets = 0;
+  double seconds = 0;
 };
 
 struct Comparison {
@@ -80,11 +101,10 @@ struct Comparison {
   int levels = 0;
   MesherReport ours, tetgen;
   bool has_tetgen = false;
-  double tetgen_pilot_seconds = 0;   // not included in TetGen's time
-  std::int64_t tetgen_pilot_tets = 0;  // N0: TetGen's count without -a (0: no pilot)
-  double tetgen_pilot_volume = 0;      // a of the second pilot (0: none)
-  std::int64_t tetgen_pilot2_tets = 0; // its count
-  double time_ratio = 0;             // TetGen seconds / ours
+  std::vector<MatchingRun> tetgen_matching;  // in order; empty when -a was given
+  double tetgen_matching_seconds = 0;        // wall time of the matching runs not reported
+  double time_ratio = 0;                     // TetGen seconds / ours (wall, median runs)
+  double cpu_time_ratio = 0;                 // the same with CPU time
 };
 
 Comparison compare3(const geometry::SceneDesc& scene, const CompareOptions& options);
