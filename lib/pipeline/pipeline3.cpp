@@ -1,7 +1,10 @@
 #include "pipeline/pipeline3.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <optional>
+#include <utility>
 
 #include "core/error.hpp"
 #include "pipeline/effective_levels.hpp"
@@ -29,6 +32,17 @@ grid::Lattice3 make_lattice3(const geometry::Oracle3& oracle, const Options& opt
   return lattice;
 }
 
+namespace {
+
+// Frees what `x` holds (clear() keeps the capacity).
+template <class T>
+void release(T& x) {
+  T empty;
+  std::swap(x, empty);
+}
+
+}  // namespace
+
 Result3 run3(const geometry::Oracle3& oracle, const grid::Lattice3& lattice, const grid::CellRange<3>& box,
              int ghost, const Options& options, int partition_id, std::span<const int> levels) {
   Result3 result;
@@ -38,19 +52,21 @@ Result3 run3(const geometry::Oracle3& oracle, const grid::Lattice3& lattice, con
     range.lo[d] = std::max<std::int64_t>(0, box.lo[d] - ghost);
     range.hi[d] = std::min<std::int64_t>(lattice.coarse_cells[d], box.hi[d] + ghost);
   }
-  samr::RefinedGrid3 grid = [&] {
+  // Optional: released (reset) before assembly.
+  std::optional<samr::RefinedGrid3> grid;
+  {
     ScopedPhase timer(&stats.times, "samr");
-    return samr::refine3(oracle, lattice, range, levels);
-  }();
+    grid.emplace(samr::refine3(oracle, lattice, range, levels));
+  }
   stats.coarse_cubes = range.count(0) * range.count(1) * range.count(2);
-  stats.refinements = grid.refinements;
-  stats.samr_sweeps = grid.sweeps;
-  for (std::int32_t t = 0; t < static_cast<std::int32_t>(grid.forest.size()); ++t)
-    stats.leaves += grid.forest.is_leaf(t) ? 1 : 0;
+  stats.refinements = grid->refinements;
+  stats.samr_sweeps = grid->sweeps;
+  for (std::int32_t t = 0; t < static_cast<std::int32_t>(grid->forest.size()); ++t)
+    stats.leaves += grid->forest.is_leaf(t) ? 1 : 0;
 
   radapt::Nodes3 nodes = [&] {
     ScopedPhase timer(&stats.times, "radapt");
-    return radapt::snap3(oracle, grid,
+    return radapt::snap3(oracle, *grid,
                          radapt::Options3{.alpha = options.alpha, .alpha_diagonal = options.alpha_diagonal3,
                                           .max_candidates = options.max_candidates3,
                                           .bound = options.bound3});
@@ -65,15 +81,15 @@ Result3 run3(const geometry::Oracle3& oracle, const grid::Lattice3& lattice, con
   stats.guard_combinations = nodes.combinations;
   stats.missing_crossings = nodes.missing_crossings;
 
-  const faceswap::Swaps3 swaps = [&] {
+  faceswap::Swaps3 swaps = [&] {
     ScopedPhase timer(&stats.times, "faceswap");
-    return faceswap::swap3(oracle, grid, nodes, faceswap::Options3{.trigger = options.swap_trigger3});
+    return faceswap::swap3(oracle, *grid, nodes, faceswap::Options3{.trigger = options.swap_trigger3});
   }();
   stats.face_swaps = swaps.swaps;
 
   subdivide::Tets3 tets = [&] {
     ScopedPhase timer(&stats.times, "subdivide");
-    return subdivide::subdivide3(oracle, grid, nodes, box, &swaps);
+    return subdivide::subdivide3(oracle, *grid, nodes, box, &swaps);
   }();
   stats.cut_tets = tets.cut_tets;
   stats.cut_nodes = tets.cut_nodes;
@@ -91,25 +107,45 @@ Result3 run3(const geometry::Oracle3& oracle, const grid::Lattice3& lattice, con
 
   {
     ScopedPhase timer(&stats.times, "assemble");
+    // The forest, the snapping state and the swaps are done with: released before the mesh
+    // is built, so that they do not add to the peak (validation/paper3/README.md, memory).
+    grid.reset();
+    release(swaps);
+    release(nodes.mask);
+    release(nodes.state);
+    release(nodes.finest_level);
+    release(nodes.tet_nodes);
+    release(nodes.registry);
+    release(nodes.edges);
+    release(nodes.edge_index);
+    release(nodes.cut_leaf_slot);
+    release(nodes.leaf_edges);
     const auto& scene = oracle.scene();
     const std::size_t lattice_count = nodes.key.size();
     const std::size_t total = lattice_count + tets.extra_points.size();
     std::vector<std::int32_t> new_id(total, -1);
     mesh::Mesh3& m = result.mesh;
     const std::size_t ntet = tets.phase.size();
-    m.cell_nodes.reserve(tets.tets.size());
-    m.cell_phase.reserve(ntet);
+    // Void tets dropped and nodes renumbered in place: the subdivision's arrays become the
+    // mesh's (no second copy of the connectivity).
+    std::size_t kept = 0;
     std::int32_t next = 0;
     for (std::size_t t = 0; t < ntet; ++t) {
       const auto& phase = scene.phases[static_cast<std::size_t>(tets.phase[t])];
       if (phase.is_void) continue;
+      std::array<std::int32_t, 4> ids;
       for (int k = 0; k < 4; ++k) {
         std::int32_t& id = new_id[static_cast<std::size_t>(tets.tets[4 * t + static_cast<std::size_t>(k)])];
         if (id < 0) id = next++;
-        m.cell_nodes.push_back(id);
+        ids[static_cast<std::size_t>(k)] = id;
       }
-      m.cell_phase.push_back(phase.id);
+      std::copy(ids.begin(), ids.end(), tets.tets.begin() + static_cast<std::ptrdiff_t>(4 * kept));
+      tets.phase[kept++] = phase.id;
     }
+    tets.tets.resize(4 * kept);
+    tets.phase.resize(kept);
+    m.cell_nodes = std::move(tets.tets);
+    m.cell_phase = std::move(tets.phase);
     m.coords.resize(3 * static_cast<std::size_t>(next));
     result.node_key.resize(static_cast<std::size_t>(next));
     result.node_identity.resize(static_cast<std::size_t>(next));
