@@ -12,6 +12,13 @@ namespace cisamr::geometry {
 
 using Rotation3 = std::array<std::array<double, 3>, 3>;  // row-major, applied as R·x
 
+// The rotation of the unit quaternion w + xi + yj + zk.
+inline Rotation3 quaternion_rotation(double w, double x, double y, double z) {
+  return {{{1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)},
+           {2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)},
+           {2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)}}};
+}
+
 // ---- 2D shapes ----
 struct Circle {
   Vec2 center{};

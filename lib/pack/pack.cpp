@@ -124,9 +124,7 @@ Rotation3 random_rotation(Random& rng) {  // Shoemake's uniform quaternion
   const double a = std::sqrt(1 - u1), b = std::sqrt(u1);
   const double x = a * std::sin(2 * M_PI * u2), y = a * std::cos(2 * M_PI * u2);
   const double z = b * std::sin(2 * M_PI * u3), w = b * std::cos(2 * M_PI * u3);
-  return {{{1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)},
-           {2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)},
-           {2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)}}};
+  return geometry::quaternion_rotation(w, x, y, z);
 }
 
 class Packer {

@@ -154,4 +154,15 @@ inline std::vector<FacetNodes<Dim>> open_facets_inside_box(const mesh::SimplexMe
   return open;
 }
 
+// The nodes of those facets, ascending, each once (the nodes on void interfaces).
+template <int Dim>
+inline std::vector<LocalId> open_facet_nodes_inside_box(const mesh::SimplexMesh<Dim>& m, const Box<Dim>& box,
+                                                        double tol) {
+  std::vector<LocalId> nodes;
+  for (const auto& f : open_facets_inside_box<Dim>(m, box, tol)) nodes.insert(nodes.end(), f.begin(), f.end());
+  std::sort(nodes.begin(), nodes.end());
+  nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
+  return nodes;
+}
+
 }  // namespace cisamr::quality::detail

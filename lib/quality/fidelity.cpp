@@ -114,11 +114,8 @@ FidelityReport check_fidelity(const mesh::Mesh2& m, const geometry::Oracle2& ora
   Box2 domain;
   domain.min = {scene.domain_min[0], scene.domain_min[1]};
   domain.max = {scene.domain_max[0], scene.domain_max[1]};
-  const auto open = detail::open_facets_inside_box<2>(m, domain, kOnBoxTolerance * box_diagonal(domain));
-  std::vector<LocalId> boundary_nodes;
-  for (const auto& f : open) boundary_nodes.insert(boundary_nodes.end(), f.begin(), f.end());
-  std::sort(boundary_nodes.begin(), boundary_nodes.end());
-  boundary_nodes.erase(std::unique(boundary_nodes.begin(), boundary_nodes.end()), boundary_nodes.end());
+  const std::vector<LocalId> boundary_nodes =
+      detail::open_facet_nodes_inside_box<2>(m, domain, kOnBoxTolerance * box_diagonal(domain));
   std::size_t shown_off_void = 0;
   PhaseMask void_mask = 0;
   for (int k = 0; k < phases && k < 64; ++k)

@@ -211,11 +211,8 @@ FidelityReport check_fidelity(const mesh::Mesh3& m, const geometry::Oracle3& ora
   // Open facets inside the domain are void interfaces: their nodes must lie on a void.
   Box3 domain;
   for (int d = 0; d < 3; ++d) domain.min[d] = scene.domain_min[d], domain.max[d] = scene.domain_max[d];
-  const auto open = detail::open_facets_inside_box<3>(m, domain, kOnBoxTolerance * box_diagonal(domain));
-  std::vector<LocalId> boundary_nodes;
-  for (const auto& f : open) boundary_nodes.insert(boundary_nodes.end(), f.begin(), f.end());
-  std::sort(boundary_nodes.begin(), boundary_nodes.end());
-  boundary_nodes.erase(std::unique(boundary_nodes.begin(), boundary_nodes.end()), boundary_nodes.end());
+  const std::vector<LocalId> boundary_nodes =
+      detail::open_facet_nodes_inside_box<3>(m, domain, kOnBoxTolerance * box_diagonal(domain));
   std::size_t shown_off_void = 0;
   PhaseMask void_mask = 0;
   for (int k = 0; k < phases && k < 64; ++k)

@@ -29,9 +29,7 @@ Rotation3 random_rotation(std::mt19937_64& rng) {
   len = std::sqrt(len);
   for (double& x : q) x /= len;
   const double w = q[0], x = q[1], y = q[2], z = q[3];
-  return {{{1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)},
-           {2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)},
-           {2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)}}};
+  return quaternion_rotation(w, x, y, z);
 }
 
 SceneDesc random_scene(std::uint64_t seed, double h) {
