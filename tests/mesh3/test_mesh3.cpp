@@ -82,7 +82,9 @@ Outcome mesh_and_check(const std::string& name, const SceneDesc& scene, double v
     volume[static_cast<std::size_t>(phase)] += mesh::signed_volume(m.point(n[0]), m.point(n[1]), m.point(n[2]), m.point(n[3]));
     for (int k = 0; k < 4; ++k) worst_distance = std::max(worst_distance, oracle.distance_to_phase(m.point(n[k]), phase));
   }
-  if (interior) EXPECT_EQ(s.collapsed_nodes, 0) << name;
+  if (interior) {
+    EXPECT_EQ(s.collapsed_nodes, 0) << name;
+  }
   EXPECT_LE(worst_distance, std::max(1e-9, s.max_collapse_deviation * (1 + 1e-9)))
       << name << ": a node of a phase-k tet lies outside phase k";
   for (std::size_t k = 0; k < volume.size(); ++k) {
