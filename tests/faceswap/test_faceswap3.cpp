@@ -25,16 +25,8 @@ using geometry::SceneDesc;
 using grid::LatticePoint3;
 namespace tet = grid::tet;
 
-struct Stage {
-  Oracle3 oracle;
-  grid::Lattice3 lattice;
-  samr::RefinedGrid3 grid;
-  radapt::Nodes3 nodes;
-  explicit Stage(const SceneDesc& scene)
-      : oracle(scene),
-        lattice(testing::lattice_of<3>(scene)),
-        grid(samr::refine3(oracle, lattice, lattice.whole_domain())),
-        nodes(radapt::snap3(oracle, grid, radapt::Options3{})) {}
+struct Stage : testing::Stage3 {
+  using Stage3::Stage3;
 
   std::int32_t node(const LatticePoint3& p) const {
     LatticePoint3 fine = p;

@@ -20,34 +20,21 @@ using geometry::SceneDesc;
 
 constexpr PhaseMask kMatrix = 1, kInclusion = 2;
 
-struct Snapped2 {
-  Oracle2 oracle;
-  grid::Lattice2 lattice;
-  samr::RefinedGrid2 grid;
-  radapt::Nodes2 nodes;
-  Snapped2(const SceneDesc& scene, double alpha)
-      : oracle(scene),
-        lattice(testing::lattice_of<2>(scene)),
-        grid(samr::refine2(oracle, lattice, lattice.whole_domain())),
-        nodes(radapt::snap2(oracle, grid, radapt::Options{alpha})) {}
+struct Snapped2 : testing::Stage2 {
+  using Stage2::Stage2;
 
   std::int32_t node(std::int64_t x, std::int64_t y) const {
     const std::int64_t u = lattice.units(0);
     return nodes.id(grid::key2(x * u, y * u));
   }
-  Vec2 lattice_position(std::int32_t n) const {
-    const grid::LatticeKey k = nodes.key[static_cast<std::size_t>(n)];
-    return {lattice.coordinate(0, grid::key2_x(k)), lattice.coordinate(1, grid::key2_y(k))};
-  }
   // The crossing of the edge between two lattice nodes nearest `from`, as the oracle gives
   // it on the segment oriented from the smaller key.
   Vec2 crossing_near(std::int32_t from, std::int32_t to) const {
     const bool from_first = nodes.key[static_cast<std::size_t>(from)] < nodes.key[static_cast<std::size_t>(to)];
-    const Vec2 a = lattice_position(from_first ? from : to), b = lattice_position(from_first ? to : from);
-    std::vector<std::int32_t> all(static_cast<std::size_t>(oracle.inclusion_count()));
-    for (std::size_t k = 0; k < all.size(); ++k) all[k] = static_cast<std::int32_t>(k);
+    const Vec2 a = lattice_position(static_cast<std::size_t>(from_first ? from : to));
+    const Vec2 b = lattice_position(static_cast<std::size_t>(from_first ? to : from));
     std::vector<geometry::Crossing> crossings;
-    oracle.crossings(a, b, all, crossings);
+    oracle.crossings(a, b, testing::all_inclusions(oracle), crossings);
     EXPECT_FALSE(crossings.empty());
     if (crossings.empty()) return a;
     const double t = from_first ? crossings.front().t : crossings.back().t;
@@ -90,7 +77,7 @@ TEST(Snap2, NodeBeyondAlphaStays) {
   const Snapped2 s(circle_scene({2, 2}, 0.8), 0.1);
   EXPECT_EQ(s.nodes.snapped_count, 0);
   for (std::size_t n = 0; n < s.nodes.key.size(); ++n)
-    EXPECT_EQ(s.nodes.position[n], s.lattice_position(static_cast<std::int32_t>(n)));
+    EXPECT_EQ(s.nodes.position[n], s.lattice_position(n));
 }
 
 // An off-centre circle: every moved node moved along one axis by at most alpha·h onto the
@@ -102,7 +89,7 @@ TEST(Snap2, MovesAlongAxisEdgesOnly) {
   EXPECT_GT(s.nodes.snapped_count, 4);
   std::int64_t snapped = 0;
   for (std::size_t n = 0; n < s.nodes.key.size(); ++n) {
-    const Vec2 home = s.lattice_position(static_cast<std::int32_t>(n));
+    const Vec2 home = s.lattice_position(n);
     const Vec2& p = s.nodes.position[n];
     if (!s.nodes.snapped[n]) {
       EXPECT_EQ(p, home);

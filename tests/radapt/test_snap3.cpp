@@ -25,23 +25,8 @@ using geometry::Oracle3;
 using geometry::SceneDesc;
 namespace tet = grid::tet;
 
-struct Snapped3 {
-  Oracle3 oracle;
-  grid::Lattice3 lattice;
-  samr::RefinedGrid3 grid;
-  radapt::Nodes3 nodes;
-  Snapped3(const SceneDesc& scene, const radapt::Options3& options)
-      : oracle(scene),
-        lattice(testing::lattice_of<3>(scene)),
-        grid(samr::refine3(oracle, lattice, lattice.whole_domain())),
-        nodes(radapt::snap3(oracle, grid, options)) {}
-
-  std::vector<std::int32_t> all_inclusions() const {
-    std::vector<std::int32_t> all(static_cast<std::size_t>(oracle.inclusion_count()));
-    for (std::size_t k = 0; k < all.size(); ++k) all[k] = static_cast<std::int32_t>(k);
-    return all;
-  }
-  Vec3 lattice_position(std::size_t n) const { return grid.forest.position(grid::key3_point(nodes.key[n])); }
+struct Snapped3 : testing::Stage3 {
+  using Stage3::Stage3;
 
   // The worst aspect ratio over what every leaf emits (grid/cut_stencil3.hpp), with the
   // nodes' final positions and masks.
@@ -75,7 +60,7 @@ TEST(Snap3, UnguardedAxisSnapsMatchABruteForceReference) {
   for (int levels : {0, 1}) {
     SCOPED_TRACE("levels " + std::to_string(levels));
     const Snapped3 s(sphere_scene({0.52, 0.47, 0.55}, 0.27, levels), options);
-    const auto all = s.all_inclusions();
+    const auto all = testing::all_inclusions(s.oracle);
     std::vector<PhaseMask> original(s.nodes.key.size());
     for (std::size_t n = 0; n < original.size(); ++n) original[n] = s.oracle.closure_phases(s.lattice_position(n), all);
 
@@ -196,7 +181,7 @@ TEST(Snap3, GuardRefusesAndCollapsesWhereSnappingBreaksTheBound) {
   }
   EXPECT_GE(differ, guarded.nodes.refused_count);
 
-  const auto all = guarded.all_inclusions();
+  const auto all = testing::all_inclusions(guarded.oracle);
   std::int64_t collapsed = 0;
   for (std::size_t n = 0; n < guarded.nodes.key.size(); ++n) {
     if (guarded.nodes.state[n] != radapt::NodeState::collapsed) continue;

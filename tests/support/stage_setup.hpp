@@ -13,12 +13,17 @@
 #include <vector>
 
 #include "core/types.hpp"
+#include "geometry/oracle2.hpp"
+#include "geometry/oracle3.hpp"
 #include "geometry/scene.hpp"
 #include "grid/cut_stencil3.hpp"
 #include "grid/lattice.hpp"
 #include "grid/tet_lattice.hpp"
 #include "mesh/metrics.hpp"
+#include "radapt/radapt2.hpp"
 #include "radapt/radapt3.hpp"
+#include "samr/samr2.hpp"
+#include "samr/samr3.hpp"
 
 namespace cisamr::testing {
 
@@ -50,6 +55,43 @@ grid::Lattice<Dim> lattice_of(const geometry::SceneDesc& scene) {
     lattice.coarse_cells[k] = std::llround((scene.domain_max[k] - scene.domain_min[k]) / scene.h);
   }
   return lattice;
+}
+
+// The stages up to r-adaptivity, run on the whole domain as the pipeline runs them.
+struct Stage2 {
+  geometry::Oracle2 oracle;
+  grid::Lattice2 lattice;
+  samr::RefinedGrid2 grid;
+  radapt::Nodes2 nodes;
+  explicit Stage2(const geometry::SceneDesc& scene, double alpha = 0.5)
+      : oracle(scene),
+        lattice(lattice_of<2>(scene)),
+        grid(samr::refine2(oracle, lattice, lattice.whole_domain())),
+        nodes(radapt::snap2(oracle, grid, radapt::Options{alpha})) {}
+  Vec2 lattice_position(std::size_t n) const {
+    return {lattice.coordinate(0, grid::key2_x(nodes.key[n])), lattice.coordinate(1, grid::key2_y(nodes.key[n]))};
+  }
+};
+
+struct Stage3 {
+  geometry::Oracle3 oracle;
+  grid::Lattice3 lattice;
+  samr::RefinedGrid3 grid;
+  radapt::Nodes3 nodes;
+  explicit Stage3(const geometry::SceneDesc& scene, const radapt::Options3& options = {})
+      : oracle(scene),
+        lattice(lattice_of<3>(scene)),
+        grid(samr::refine3(oracle, lattice, lattice.whole_domain())),
+        nodes(radapt::snap3(oracle, grid, options)) {}
+  Vec3 lattice_position(std::size_t n) const { return grid.forest.position(grid::key3_point(nodes.key[n])); }
+};
+
+// Every inclusion of an oracle, as a candidate list.
+template <class Oracle>
+std::vector<std::int32_t> all_inclusions(const Oracle& oracle) {
+  std::vector<std::int32_t> all(static_cast<std::size_t>(oracle.inclusion_count()));
+  for (std::size_t k = 0; k < all.size(); ++k) all[k] = static_cast<std::int32_t>(k);
+  return all;
 }
 
 // ---- 3D leaves as the guard and subdivide3 see them ----
