@@ -29,7 +29,6 @@
 #include "parallel/output.hpp"
 #include "parallel/session.hpp"
 #include "pipeline/pipeline.hpp"
-#include "pipeline/pipeline3.hpp"
 #include "quality/quality.hpp"
 
 namespace cisamr::app {
@@ -68,7 +67,7 @@ nlohmann::json aspect_json(const quality::AspectStats& aspect) {
           {"max_angle_deg", aspect.max_angle_deg}};
 }
 
-nlohmann::json algorithm_json(const MeshArgs& args, const pipeline::Stats& stats) {
+nlohmann::json algorithm_json(const MeshArgs& args, const pipeline::Counters<2>& stats) {
   return {{"alpha", args.alpha},
           {"extra_levels", args.extra_levels},
           {"coarse_cells", stats.coarse_cells},
@@ -85,12 +84,12 @@ nlohmann::json algorithm_json(const MeshArgs& args, const pipeline::Stats& stats
           {"max_collapse_deviation", stats.max_collapse_deviation}};
 }
 
-nlohmann::json algorithm_json(const MeshArgs& args, const pipeline::Stats3& stats) {
+nlohmann::json algorithm_json(const MeshArgs& args, const pipeline::Counters<3>& stats) {
   const pipeline::Options defaults;
   return {{"alpha", args.alpha},
           {"alpha_diagonal", defaults.alpha_diagonal3},
           {"extra_levels", args.extra_levels},
-          {"coarse_cubes", stats.coarse_cubes},
+          {"coarse_cubes", stats.coarse_cells},
           {"leaves", stats.leaves},
           {"refinements", stats.refinements},
           {"finest_level", stats.max_level},
@@ -125,7 +124,8 @@ double cell_measure(const mesh::Mesh3& m, std::size_t c) {
 
 template <int Dim, class Stats>
 nlohmann::json report_json(const MeshArgs& args, const geometry::SceneDesc& scene, const mesh::SimplexMesh<Dim>& m,
-                           const Stats& stats, const quality::AspectStats& aspect, double total_seconds) {
+                           const Stats& stats, const PhaseTimes& times, const quality::AspectStats& aspect,
+                           double total_seconds) {
   nlohmann::json j;
   j["format"] = "cisamr-report/1";
   j["scene"] = args.scene;
@@ -150,10 +150,10 @@ nlohmann::json report_json(const MeshArgs& args, const geometry::SceneDesc& scen
   j["phases"] = phases;
   j["aspect_ratio"] = aspect_json(aspect);  // angles: triangle angles in 2D, dihedral angles in 3D
   j["algorithm"] = algorithm_json(args, stats);
-  nlohmann::json times = nlohmann::json::object();
-  for (const auto& [name, seconds] : stats.times.phases())
-    times[name] = {{"min", seconds}, {"max", seconds}, {"mean", seconds}};
-  j["timings_s"] = times;
+  nlohmann::json timings = nlohmann::json::object();
+  for (const auto& [name, seconds] : times.phases())
+    timings[name] = {{"min", seconds}, {"max", seconds}, {"mean", seconds}};
+  j["timings_s"] = timings;
   j["total_s"] = total_seconds;
   j["ranks"] = 1;
   j["partitions"] = nlohmann::json::array({{{"partition", 0}, {"rank", 0}, {"elements", m.cell_count()}}});
@@ -175,19 +175,19 @@ void run_sequential(const MeshArgs& args, const geometry::SceneDesc& scene, cons
                            : "meshing (SAMR, r-adaptivity with the quality guard, face swapping, subdivision)");
   auto result = [&] {
     if constexpr (Dim == 2)
-      return pipeline::mesh2(oracle, options);
+      return pipeline::mesh(oracle, options);
     else
-      return pipeline::mesh3_with_stats(oracle, options);
+      return pipeline::mesh(oracle, options);
   }();
   const double bound = args.bound > 0 ? args.bound : Dim == 2 ? 3.0 : 5.0;
   quality::AspectStats aspect;
   {
-    ScopedPhase timer(&result.stats.times, "quality");
+    ScopedPhase timer(&result.times, "quality");
     aspect = quality::aspect_statistics(result.mesh, bound);
   }
   progress(flags, "writing the mesh");
   {
-    ScopedPhase timer(&result.stats.times, "write");
+    ScopedPhase timer(&result.times, "write");
     io::write_mesh(args.output, result.mesh, scene.phases);
     if constexpr (Dim == 2)
       if (!args.svg.empty()) io::write_mesh_svg(args.svg, result.mesh, scene);
@@ -195,7 +195,7 @@ void run_sequential(const MeshArgs& args, const geometry::SceneDesc& scene, cons
   const double total = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (!args.report.empty()) {
     io::AtomicFile file(args.report);
-    file.write(report_json<Dim>(args, scene, result.mesh, result.stats, aspect, total).dump(2) + "\n");
+    file.write(report_json<Dim>(args, scene, result.mesh, result.counters, result.times, aspect, total).dump(2) + "\n");
     file.commit();
   }
   if (!flags.quiet)
@@ -203,22 +203,22 @@ void run_sequential(const MeshArgs& args, const geometry::SceneDesc& scene, cons
                 result.mesh.node_count(), result.mesh.cell_count(), Dim == 2 ? "triangles" : "tetrahedra", aspect.max,
                 bound, aspect.above_bound, total);
   if (flags.verbose)
-    for (const auto& [name, seconds] : result.stats.times.phases()) std::printf("  %-10s %8.3f s\n", name.c_str(), seconds);
+    for (const auto& [name, seconds] : result.times.phases()) std::printf("  %-10s %8.3f s\n", name.c_str(), seconds);
   if constexpr (Dim == 2) {
-    if (result.stats.collapsed > 0 && !flags.quiet)
+    if (result.counters.collapsed > 0 && !flags.quiet)
       std::printf("%lld quads held a feature below the local resolution (a tangency, a thin gap or a wedge "
                   "sharper than the bound allows); collapsed with nodes at most %.3g from the phases they serve\n",
-                  static_cast<long long>(result.stats.collapsed), result.stats.max_collapse_deviation);
+                  static_cast<long long>(result.counters.collapsed), result.counters.max_collapse_deviation);
   } else {
-    if (result.stats.collapsed_nodes + result.stats.collapsed_cut_points > 0 && !flags.quiet)
+    if (result.counters.collapsed_nodes + result.counters.collapsed_cut_points > 0 && !flags.quiet)
       std::printf("%lld nodes could neither stay nor snap without a tetrahedron above the bound (a tangency, a "
                   "thin gap or a wedge at the domain boundary); collapsed onto the interface, at most %.3g from "
                   "the phases they serve\n",
-                  static_cast<long long>(result.stats.collapsed_nodes), result.stats.max_collapse_deviation);
+                  static_cast<long long>(result.counters.collapsed_nodes), result.counters.max_collapse_deviation);
   }
-  if (result.stats.unresolved > 0)
+  if (result.counters.unresolved > 0)
     std::fprintf(stderr, "cisamr: warning: %lld %s below the finest level's resolution\n",
-                 static_cast<long long>(result.stats.unresolved), Dim == 2 ? "quads" : "leaves");
+                 static_cast<long long>(result.counters.unresolved), Dim == 2 ? "quads" : "leaves");
   exit_code = aspect.above_bound > 0 ? 3 : 0;
 }
 
@@ -335,8 +335,8 @@ void run_parallel(const MeshArgs& args, const GlobalFlags& flags, int& exit_code
                           {"elements", per_phase[i].first}, {"measure", per_phase[i].second}});
       j["phases"] = phases;
       j["aspect_ratio"] = aspect_json(aspect);
-      j["algorithm"] = algorithm_json(args, dm.stats);
-      if constexpr (Dim == 2) j["algorithm"]["coarse_cells_meshed"] = dm.stats.coarse_cells;
+      j["algorithm"] = algorithm_json(args, dm.counters);
+      if constexpr (Dim == 2) j["algorithm"]["coarse_cells_meshed"] = dm.counters.coarse_cells;
       if constexpr (Dim == 3) j["stl_files_read"] = {{"min", stl_min}, {"max", stl_max}, {"total", stl_total}};
       nlohmann::json times = nlohmann::json::object();
       for (const auto& s : spread) times[s.name] = {{"min", s.min}, {"max", s.max}, {"mean", s.mean}};
@@ -372,15 +372,15 @@ void run_parallel(const MeshArgs& args, const GlobalFlags& flags, int& exit_code
                 output.c_str(), static_cast<long long>(dm.piece.global_nodes), static_cast<long long>(dm.global_cells),
                 Dim == 2 ? "triangles" : "tetrahedra", aspect.max, bound, total, comm.size(), dm.partitions.size());
     if constexpr (Dim == 2) {
-      if (dm.stats.collapsed > 0)
+      if (dm.counters.collapsed > 0)
         std::printf("%lld quads held a feature below the local resolution (a tangency, a thin gap or a wedge "
                     "sharper than the bound allows); collapsed with nodes at most %.3g from the phases they serve\n",
-                    static_cast<long long>(dm.stats.collapsed), dm.stats.max_collapse_deviation);
+                    static_cast<long long>(dm.counters.collapsed), dm.counters.max_collapse_deviation);
     } else {
-      if (dm.stats.collapsed_nodes + dm.stats.collapsed_cut_points > 0)
+      if (dm.counters.collapsed_nodes + dm.counters.collapsed_cut_points > 0)
         std::printf("%lld nodes could neither stay nor snap without a tetrahedron above the bound; collapsed onto the "
                     "interface, at most %.3g from the phases they serve\n",
-                    static_cast<long long>(dm.stats.collapsed_nodes), dm.stats.max_collapse_deviation);
+                    static_cast<long long>(dm.counters.collapsed_nodes), dm.counters.max_collapse_deviation);
     }
   }
   if (root && flags.verbose) {
@@ -397,9 +397,9 @@ void run_parallel(const MeshArgs& args, const GlobalFlags& flags, int& exit_code
                   static_cast<long long>(p.elements), p.ghost, static_cast<long long>(p.inclusions), p.kernel_seconds);
     }
   }
-  if (root && dm.stats.unresolved > 0)
+  if (root && dm.counters.unresolved > 0)
     std::fprintf(stderr, "cisamr: warning: %lld %s below the finest level's resolution\n",
-                 static_cast<long long>(dm.stats.unresolved), Dim == 2 ? "quads" : "leaves");
+                 static_cast<long long>(dm.counters.unresolved), Dim == 2 ? "quads" : "leaves");
   exit_code = aspect.above_bound > 0 ? 3 : 0;
 }
 
