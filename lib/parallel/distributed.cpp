@@ -2,8 +2,10 @@
 
 #include <algorithm>
 #include <chrono>
+#include <limits>
 #include <map>
 #include <regex>
+#include <type_traits>
 
 #include "geometry/oracle2.hpp"
 #include "geometry/oracle3.hpp"
@@ -85,13 +87,13 @@ StlShares share_stl_surfaces(const Comm& comm, geometry::SceneDesc& scene, const
   for (std::int32_t k : unread)
     if (owner[static_cast<std::size_t>(k)] == rank) mine.push_back(k);
 
-  Packer boxes, loads;
+  std::vector<StlBox> boxes;
+  Packer loads;
   run_collectively(comm, [&] {
     out.files_read += io::load_stl_surfaces(scene, mine, &out.cache);
-    std::vector<StlBox> b;
     for (std::int32_t k : mine) {
       const geometry::Inclusion& inc = scene.inclusions[static_cast<std::size_t>(k)];
-      b.push_back({k, geometry::shape_bounding_box(inc.shape)});
+      boxes.push_back({k, geometry::shape_bounding_box(inc.shape)});
       if (!loads_needed) continue;
       const partition::InclusionLoad load = partition::stl_surface_load(scene, k, popt);
       loads.put<std::int32_t>(k);
@@ -99,10 +101,8 @@ StlShares share_stl_surfaces(const Comm& comm, geometry::SceneDesc& scene, const
       loads.put_vector(load.loads);
       loads.put(load.box);
     }
-    boxes.put_vector(b);
   });
-  for (const Bytes& bytes : allgather_bytes(comm, boxes.bytes()))
-    for (const StlBox& b : Unpacker(bytes).get_vector<StlBox>()) out.known[static_cast<std::size_t>(b.inclusion)] = b.box;
+  for (const StlBox& b : allgather_vector(comm, boxes)) out.known[static_cast<std::size_t>(b.inclusion)] = b.box;
   if (loads_needed) {
     out.loads.resize(n);
     for (const Bytes& bytes : gather_bytes(comm, loads.take())) {
@@ -117,10 +117,9 @@ StlShares share_stl_surfaces(const Comm& comm, geometry::SceneDesc& scene, const
   }
 
   // The sweep of pipeline::surface_unions, on the same boxes.
-  Packer pairs;
+  std::vector<pipeline::SurfacePair> found;
   run_collectively(comm, [&] {
     const std::vector<Box3> box = pipeline::holding_boxes(scene, out.known);
-    std::vector<pipeline::SurfacePair> found;
     std::int64_t candidate = 0;
     for (const pipeline::SurfacePair& p : pipeline::surface_union_candidates(scene, box)) {
       // Who decides: the reader of the first unread STL member, else ranks in turn.
@@ -137,12 +136,8 @@ StlShares share_stl_surfaces(const Comm& comm, geometry::SceneDesc& scene, const
                                    scene.inclusions[static_cast<std::size_t>(p.b)].shape, 0))
         found.push_back(p);
     }
-    pairs.put_vector(found);
   });
-  for (const Bytes& bytes : allgather_bytes(comm, pairs.bytes())) {
-    const auto v = Unpacker(bytes).get_vector<pipeline::SurfacePair>();
-    out.unions.insert(out.unions.end(), v.begin(), v.end());
-  }
+  out.unions = allgather_vector(comm, found);
   std::sort(out.unions.begin(), out.unions.end());
   // Triangles stay in the cache only (for the partitions that need them later).
   for (std::int32_t k : unread)
@@ -152,115 +147,27 @@ StlShares share_stl_surfaces(const Comm& comm, geometry::SceneDesc& scene, const
 
 namespace {
 
-// The dimension's kernel and counters.
-pipeline::Result2 run_kernel(const geometry::Oracle2& oracle, const grid::Lattice2& lattice,
-                             const GhostRegion2& region, const pipeline::Options& options, int partition,
-                             std::span<const int> levels) {
-  return pipeline::run2(oracle, lattice, region.box, region.ghost, options, partition, levels);
-}
-pipeline::Result3 run_kernel(const geometry::Oracle3& oracle, const grid::Lattice3& lattice,
-                             const GhostRegion3& region, const pipeline::Options& options, int partition,
-                             std::span<const int> levels) {
-  return pipeline::run3(oracle, lattice, region.box, region.ghost, options, partition, levels);
-}
-std::int64_t coarse_cells_of(const pipeline::Stats& s) { return s.coarse_cells; }
-std::int64_t coarse_cells_of(const pipeline::Stats3& s) { return s.coarse_cubes; }
-
-// Counters of one partition into this rank's sum (box cells only: ghost work is in leaves).
-void accumulate(pipeline::Stats& sum, const pipeline::Stats& st, std::int64_t box_cells) {
-  sum.coarse_cells += box_cells;
-  sum.leaves += st.leaves;
-  sum.refinements += st.refinements;
-  sum.lattice_nodes += st.lattice_nodes;
-  sum.snapped_nodes += st.snapped_nodes;
-  sum.cut_quads += st.cut_quads;
-  sum.double_diagonal += st.double_diagonal;
-  sum.hanging_cells += st.hanging_cells;
-  sum.unresolved += st.unresolved;
-  sum.collapsed += st.collapsed;
-  sum.max_collapse_deviation = std::max(sum.max_collapse_deviation, st.max_collapse_deviation);
-  if (st.min_collapse_level >= 0)
-    sum.min_collapse_level =
-        sum.min_collapse_level < 0 ? st.min_collapse_level : std::min(sum.min_collapse_level, st.min_collapse_level);
-}
-void accumulate(pipeline::Stats3& sum, const pipeline::Stats3& st, std::int64_t box_cells) {
-  sum.coarse_cubes += box_cells;
-  sum.leaves += st.leaves;
-  sum.refinements += st.refinements;
-  sum.samr_sweeps = std::max(sum.samr_sweeps, st.samr_sweeps);
-  sum.lattice_nodes += st.lattice_nodes;
-  sum.snapped_nodes += st.snapped_nodes;
-  sum.cut_tets += st.cut_tets;
-  sum.cut_nodes += st.cut_nodes;
-  sum.closed_tets += st.closed_tets;
-  sum.steiner_points += st.steiner_points;
-  sum.unresolved += st.unresolved;
-  sum.inverted += st.inverted;
-  sum.missing_crossings += st.missing_crossings;
-  sum.worst_closure = std::max(sum.worst_closure, st.worst_closure);
-  sum.worst_kept = std::max(sum.worst_kept, st.worst_kept);
-  sum.worst_split = std::max(sum.worst_split, st.worst_split);
-  sum.kept_above_5 += st.kept_above_5;
-  sum.split_above_5 += st.split_above_5;
-  sum.worst_swapped = std::max(sum.worst_swapped, st.worst_swapped);
-  sum.face_swaps += st.face_swaps;
-  sum.refused_nodes += st.refused_nodes;
-  sum.collapsed_nodes += st.collapsed_nodes;
-  sum.collapsed_cut_points += st.collapsed_cut_points;
-  sum.max_collapse_deviation = std::max(sum.max_collapse_deviation, st.max_collapse_deviation);
-  sum.guarded_leaves += st.guarded_leaves;
-  sum.guard_combinations += st.guard_combinations;
-  sum.max_level = std::max(sum.max_level, st.max_level);
-}
-
-// Sums (maxima) over ranks.
-pipeline::Stats reduce(const Comm& comm, const pipeline::Stats& local) {
-  pipeline::Stats g;
-  g.coarse_cells = comm.allreduce_sum(local.coarse_cells);
-  g.leaves = comm.allreduce_sum(local.leaves);
-  g.refinements = comm.allreduce_sum(local.refinements);
-  g.lattice_nodes = comm.allreduce_sum(local.lattice_nodes);
-  g.snapped_nodes = comm.allreduce_sum(local.snapped_nodes);
-  g.cut_quads = comm.allreduce_sum(local.cut_quads);
-  g.double_diagonal = comm.allreduce_sum(local.double_diagonal);
-  g.hanging_cells = comm.allreduce_sum(local.hanging_cells);
-  g.unresolved = comm.allreduce_sum(local.unresolved);
-  g.collapsed = comm.allreduce_sum(local.collapsed);
-  g.max_collapse_deviation = comm.allreduce_max(local.max_collapse_deviation);
-  const double coarsest = comm.allreduce_min(local.min_collapse_level < 0 ? 1e9 : double(local.min_collapse_level));
-  g.min_collapse_level = coarsest >= 1e9 ? -1 : static_cast<int>(coarsest);
-  return g;
-}
-pipeline::Stats3 reduce(const Comm& comm, const pipeline::Stats3& local) {
-  pipeline::Stats3 g;
-  g.coarse_cubes = comm.allreduce_sum(local.coarse_cubes);
-  g.leaves = comm.allreduce_sum(local.leaves);
-  g.refinements = comm.allreduce_sum(local.refinements);
-  g.samr_sweeps = static_cast<int>(comm.allreduce_max(std::int64_t{local.samr_sweeps}));
-  g.lattice_nodes = comm.allreduce_sum(local.lattice_nodes);
-  g.snapped_nodes = comm.allreduce_sum(local.snapped_nodes);
-  g.cut_tets = comm.allreduce_sum(local.cut_tets);
-  g.cut_nodes = comm.allreduce_sum(local.cut_nodes);
-  g.closed_tets = comm.allreduce_sum(local.closed_tets);
-  g.steiner_points = comm.allreduce_sum(local.steiner_points);
-  g.unresolved = comm.allreduce_sum(local.unresolved);
-  g.inverted = comm.allreduce_sum(local.inverted);
-  g.missing_crossings = comm.allreduce_sum(local.missing_crossings);
-  g.worst_closure = comm.allreduce_max(local.worst_closure);
-  g.worst_kept = comm.allreduce_max(local.worst_kept);
-  g.worst_split = comm.allreduce_max(local.worst_split);
-  g.kept_above_5 = comm.allreduce_sum(local.kept_above_5);
-  g.split_above_5 = comm.allreduce_sum(local.split_above_5);
-  g.worst_swapped = comm.allreduce_max(local.worst_swapped);
-  g.face_swaps = comm.allreduce_sum(local.face_swaps);
-  g.refused_nodes = comm.allreduce_sum(local.refused_nodes);
-  g.collapsed_nodes = comm.allreduce_sum(local.collapsed_nodes);
-  g.collapsed_cut_points = comm.allreduce_sum(local.collapsed_cut_points);
-  g.max_collapse_deviation = comm.allreduce_max(local.max_collapse_deviation);
-  g.guarded_leaves = comm.allreduce_sum(local.guarded_leaves);
-  g.guard_combinations = comm.allreduce_sum(local.guard_combinations);
-  g.max_level = static_cast<int>(comm.allreduce_max(std::int64_t{local.max_level}));
-  return g;
+// Counters over every rank's partitions, each combined as its Reduction says.
+template <int Dim>
+pipeline::Counters<Dim> reduce_over_ranks(const Comm& comm, const pipeline::Counters<Dim>& local) {
+  pipeline::Counters<Dim> global = local;
+  pipeline::Counters<Dim>::for_each([&](const char*, auto member, pipeline::Reduction reduction) {
+    auto& value = global.*member;
+    using T = std::remove_reference_t<decltype(value)>;
+    // Integers travel as int64 (exact), the rest as double.
+    using Wide = std::conditional_t<std::is_integral_v<T>, std::int64_t, double>;
+    const Wide v = value;
+    switch (reduction) {
+      case pipeline::Reduction::sum: value = static_cast<T>(comm.allreduce_sum(v)); break;
+      case pipeline::Reduction::max: value = static_cast<T>(comm.allreduce_max(v)); break;
+      case pipeline::Reduction::min: {  // of the set values (≥ 0); −1 when no rank has one
+        const Wide least = comm.allreduce_max(v >= 0 ? -v : std::numeric_limits<Wide>::lowest());
+        value = static_cast<T>(least == std::numeric_limits<Wide>::lowest() ? -1 : -least);
+        break;
+      }
+    }
+  });
+  return global;
 }
 
 }  // namespace
@@ -406,7 +313,7 @@ DistributedMesh<Dim> mesh_distributed(const Comm& comm, geometry::SceneDesc scen
   // the other partitions of its rank, so the gathered file does not depend on the ranks.
   std::vector<PartitionOutput<Dim>> outputs;
   std::vector<PartitionSummary> mine;
-  KernelStats<Dim> local;
+  pipeline::Counters<Dim> local;
   run_collectively(comm, [&] {
     for (int p = first; p < last; ++p) {
       const GhostRegion<Dim>& region = regions[static_cast<std::size_t>(p - first)];
@@ -428,7 +335,8 @@ DistributedMesh<Dim> mesh_distributed(const Comm& comm, geometry::SceneDesc scen
       const auto t0 = std::chrono::steady_clock::now();
       std::vector<int> region_levels;
       for (std::int32_t k : region.inclusions) region_levels.push_back(levels[static_cast<std::size_t>(k)]);
-      PartitionOutput<Dim> o{p, region.box, run_kernel(*oracle, lattice, region, options.pipeline, p, region_levels)};
+      PartitionOutput<Dim> o{
+          p, region.box, pipeline::run(*oracle, lattice, region.box, region.ghost, options.pipeline, p, region_levels)};
       std::int64_t box_cells = 1;
       for (int d = 0; d < Dim; ++d) box_cells *= region.box.count(d);
       PartitionSummary s;
@@ -438,12 +346,15 @@ DistributedMesh<Dim> mesh_distributed(const Comm& comm, geometry::SceneDesc scen
       for (int d = 0; d < Dim; ++d) s.lattice_min[d] = region.box.lo[d], s.lattice_max[d] = region.box.hi[d];
       s.load = boxes[static_cast<std::size_t>(p)].load;
       s.ghost = region.ghost;
-      s.ghost_cells = coarse_cells_of(o.result.stats) - box_cells;
+      s.ghost_cells = o.result.counters.coarse_cells - box_cells;
       s.inclusions = static_cast<std::int64_t>(region.inclusions.size());
       s.elements = static_cast<std::int64_t>(o.result.mesh.cell_count());
       s.nodes = static_cast<std::int64_t>(o.result.mesh.node_count());
-      for (const auto& [name, sec] : o.result.stats.times.phases()) out.times.add(name, sec);
-      accumulate(local, o.result.stats, box_cells);
+      for (const auto& [name, sec] : o.result.times.phases()) out.times.add(name, sec);
+      // The box's coarse cells only (the partitions tile the domain); ghost work is in
+      // the other counters and in the summary.
+      o.result.counters.coarse_cells = box_cells;
+      pipeline::accumulate(local, o.result.counters);
       mine.push_back(s);
       outputs.push_back(std::move(o));
     }
@@ -457,16 +368,10 @@ DistributedMesh<Dim> mesh_distributed(const Comm& comm, geometry::SceneDesc scen
 
   // Counters over all ranks. (leaves/refinements/... count ghost work too: they say what
   // was computed, not what was kept.)
-  out.stats = reduce(comm, local);
-  out.stats.max_level = lattice.max_level;
+  out.counters = reduce_over_ranks(comm, local);
 
   // Every partition's summary on every rank.
-  Packer p;
-  p.put_vector(mine);
-  for (const Bytes& b : allgather_bytes(comm, p.bytes())) {
-    const auto v = Unpacker(b).get_vector<PartitionSummary>();
-    out.partitions.insert(out.partitions.end(), v.begin(), v.end());
-  }
+  out.partitions = allgather_vector(comm, mine);
   std::sort(out.partitions.begin(), out.partitions.end(),
             [](const PartitionSummary& a, const PartitionSummary& b) { return a.id < b.id; });
   return out;

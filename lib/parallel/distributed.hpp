@@ -12,12 +12,11 @@
 //   oracle    per own partition, an Oracle2/Oracle3 from exactly its ghost region's
 //             inclusions (original order kept); the rest of the scene's descriptors is
 //             dropped first, and the STL files of the kept ones are read (once per rank)
-//   kernel    pipeline::run2/run3 unchanged on each own partition
+//   kernel    pipeline::run unchanged on each own partition
 //   merge     nodes merged by lattice identity, owners, global ids (merge.hpp)
 // Every stage ends with an agreement on errors (collective.hpp).
 #include <cstdint>
 #include <string>
-#include <type_traits>
 #include <vector>
 
 #include "core/comm.hpp"
@@ -28,7 +27,6 @@
 #include "parallel/merge.hpp"
 #include "partition/partition.hpp"
 #include "pipeline/pipeline.hpp"
-#include "pipeline/pipeline3.hpp"
 
 namespace cisamr::parallel {
 
@@ -47,7 +45,7 @@ struct PartitionSummary {
   std::int64_t ghost_cells = 0;   // coarse cells meshed beyond its box
   std::int64_t inclusions = 0;    // inclusions its ghost region loads
   std::int64_t elements = 0, nodes = 0;
-  double kernel_seconds = 0;      // pipeline::run2 / run3
+  double kernel_seconds = 0;      // pipeline::run
 };
 
 // What the ranks learn about the STL surfaces whose triangles the scene does not hold
@@ -78,9 +76,6 @@ std::array<int, 2> partitions_of_rank(int partitions, int ranks, int rank);
 int rank_of_partition(int partition, int partitions, int ranks);
 
 template <int Dim>
-using KernelStats = std::conditional_t<Dim == 2, pipeline::Stats, pipeline::Stats3>;
-
-template <int Dim>
 struct DistributedMesh {
   NumberedPiece<Dim> piece;         // this rank's cells and nodes, global ids
   std::vector<geometry::Phase> phases;
@@ -91,7 +86,7 @@ struct DistributedMesh {
   std::vector<PartitionSummary> partitions;     // every partition, by id, on every rank
   std::vector<std::int32_t> loaded_inclusions;  // what this rank's partitions load: scene indices, ascending
   std::int64_t stl_files_read = 0;  // STL files this rank read (3D): its share, then what its partitions need
-  KernelStats<Dim> stats;           // counters summed over all partitions of all ranks
+  pipeline::Counters<Dim> counters;  // over all partitions of all ranks (coarse cells: the boxes')
   PhaseTimes times;                 // this rank's phase times
 };
 using DistributedMesh2 = DistributedMesh<2>;
@@ -107,18 +102,5 @@ DistributedMesh<Dim> mesh_distributed(const Comm& comm, const std::string& scene
 // STL surfaces without triangles are read from their files by the ranks that need them.
 template <int Dim>
 DistributedMesh<Dim> mesh_distributed(const Comm& comm, geometry::SceneDesc scene, const MeshOptions& options);
-
-inline DistributedMesh2 mesh2_distributed(const Comm& comm, const std::string& scene_path, const MeshOptions& options) {
-  return mesh_distributed<2>(comm, scene_path, options);
-}
-inline DistributedMesh2 mesh2_distributed(const Comm& comm, geometry::SceneDesc scene, const MeshOptions& options) {
-  return mesh_distributed<2>(comm, std::move(scene), options);
-}
-inline DistributedMesh3 mesh3_distributed(const Comm& comm, const std::string& scene_path, const MeshOptions& options) {
-  return mesh_distributed<3>(comm, scene_path, options);
-}
-inline DistributedMesh3 mesh3_distributed(const Comm& comm, geometry::SceneDesc scene, const MeshOptions& options) {
-  return mesh_distributed<3>(comm, std::move(scene), options);
-}
 
 }  // namespace cisamr::parallel

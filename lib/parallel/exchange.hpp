@@ -91,6 +91,19 @@ inline std::vector<Bytes> allgather_bytes(const Comm& comm, const Bytes& bytes) 
   return comm.alltoallv(std::vector<Bytes>(static_cast<std::size_t>(comm.size()), bytes));
 }
 
+// Collective: every rank's elements, concatenated in rank order, on every rank.
+template <class T>
+std::vector<T> allgather_vector(const Comm& comm, const std::vector<T>& mine) {
+  Packer p;
+  p.put_vector(mine);
+  std::vector<T> all;
+  for (const Bytes& bytes : allgather_bytes(comm, p.bytes())) {
+    const std::vector<T> v = Unpacker(bytes).get_vector<T>();
+    all.insert(all.end(), v.begin(), v.end());
+  }
+  return all;
+}
+
 // Collective: rank `root` receives every rank's bytes (others get empty buffers).
 inline std::vector<Bytes> gather_bytes(const Comm& comm, Bytes bytes, int root = 0) {
   std::vector<Bytes> send(static_cast<std::size_t>(comm.size()));

@@ -3,28 +3,14 @@
 #include <algorithm>
 #include <cmath>
 
-#include "geometry/oracle2.hpp"
-#include "geometry/oracle3.hpp"
 #include "geometry/shapes.hpp"
 #include "pipeline/effective_levels.hpp"
-#include "pipeline/pipeline3.hpp"
 
 namespace cisamr::parallel {
 
 template <int Dim>
 grid::Lattice<Dim> scene_lattice(const geometry::SceneDesc& scene, const pipeline::Options& options) {
-  geometry::SceneDesc header = scene;
-  header.inclusions.clear();
-  grid::Lattice<Dim> lattice;
-  if constexpr (Dim == 2)
-    lattice = pipeline::make_lattice2(geometry::Oracle2(header), options);
-  else
-    lattice = pipeline::make_lattice3(geometry::Oracle3(header), options);
-  int levels = scene.levels;
-  for (const auto& inc : scene.inclusions) levels = std::max(levels, inc.levels);
-  lattice.max_level = levels + std::max(0, options.extra_levels);
-  if constexpr (Dim == 3) grid::require_key3(lattice);
-  return lattice;
+  return pipeline::make_lattice<Dim>(scene, options);
 }
 
 template <int Dim>

@@ -24,16 +24,14 @@ std::uint64_t hash_of(const std::array<std::uint64_t, 2>& key) { return mix(mix(
 
 bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof(double)) == 0; }
 
-// What differs between 2D and 3D: where a node's identity comes from, which identities are
-// never shared, which lie on a partition face, and how an error names a node.
+// What differs between 2D and 3D: which identities lie on a partition face, and how an
+// error names a node.
 template <int Dim>
 struct Identities;
 
 template <>
 struct Identities<2> {
   using Key = std::uint64_t;
-  static Key of(const pipeline::Result2& r, std::size_t n) { return r.node_key[n]; }
-  static bool unshared(Key k) { return k == pipeline::Result2::kInteriorNode; }
   static std::array<std::int64_t, 2> point(std::uint64_t k) { return {grid::key2_x(k), grid::key2_y(k)}; }
   static std::array<std::uint64_t, 1> lattice_keys(Key k) { return {k}; }
   static std::string name(Key k) {
@@ -44,8 +42,6 @@ struct Identities<2> {
 template <>
 struct Identities<3> {
   using Key = std::array<std::uint64_t, 2>;
-  static Key of(const pipeline::Result3& r, std::size_t n) { return r.node_identity[n]; }
-  static bool unshared(const Key& k) { return k[0] == pipeline::Result3::kNotLatticeNode; }
   static std::array<std::int64_t, 3> point(std::uint64_t k) { return grid::key3_point(k); }
   // A cut node lies on a face iff its whole edge does: both ends must be on one.
   static Key lattice_keys(const Key& k) { return k; }
@@ -149,8 +145,8 @@ NumberedPiece<Dim> merge_and_number(const Comm& comm, std::vector<PartitionOutpu
       };
       std::vector<std::int32_t> local(m.node_count());
       for (std::size_t n = 0; n < m.node_count(); ++n) {
-        const Key key = Id::of(part.result, n);
-        const bool unshared = Id::unshared(key);
+        const Key key = part.result.node_identity[n];
+        const bool unshared = key == pipeline::Result<Dim>::kUnshared;
         const auto next = static_cast<std::int32_t>(keys.size());
         bool inserted = true;
         const std::int32_t id = unshared ? next : by_key.insert(key, next, inserted);
@@ -179,7 +175,7 @@ NumberedPiece<Dim> merge_and_number(const Comm& comm, std::vector<PartitionOutpu
         cells.cell_phase.push_back(m.cell_phase[c]);
         cells.cell_partition.push_back(part.partition);
       }
-      part.result = KernelResult<Dim>{};  // release the partition's copy early
+      part.result = pipeline::Result<Dim>{};  // release the partition's copy early
     }
   });
 

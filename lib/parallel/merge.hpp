@@ -15,29 +15,20 @@
 // identities on partition faces.
 #include <array>
 #include <cstdint>
-#include <type_traits>
 #include <vector>
 
 #include "core/comm.hpp"
 #include "grid/lattice.hpp"
 #include "mesh/simplex_mesh.hpp"
 #include "pipeline/pipeline.hpp"
-#include "pipeline/pipeline3.hpp"
 
 namespace cisamr::parallel {
-
-// What identifies a node across partitions: a 2D lattice key (Result2::kInteriorNode for
-// points interior to one cell), or the 3D pair of Result3::node_identity.
-template <int Dim>
-using NodeIdentity = std::conditional_t<Dim == 2, std::uint64_t, std::array<std::uint64_t, 2>>;
-template <int Dim>
-using KernelResult = std::conditional_t<Dim == 2, pipeline::Result2, pipeline::Result3>;
 
 template <int Dim>
 struct PartitionOutput {
   int partition = 0;
   grid::CellRange<Dim> box;  // its coarse cells
-  KernelResult<Dim> result;
+  pipeline::Result<Dim> result;
 };
 using PartitionOutput2 = PartitionOutput<2>;
 using PartitionOutput3 = PartitionOutput<3>;
@@ -47,7 +38,7 @@ struct NumberedPiece {
   // This rank's cells (partition by partition, ascending); nodes: the ones it owns first,
   // then copies of nodes owned elsewhere. node_global_id set, cell_partition set.
   mesh::SimplexMesh<Dim> mesh;
-  std::vector<NodeIdentity<Dim>> node_key;  // per node, its merge identity
+  std::vector<pipeline::NodeIdentity<Dim>> node_key;  // per node, its merge identity
   std::int64_t owned_nodes = 0;
   std::int64_t global_nodes = 0;
 };

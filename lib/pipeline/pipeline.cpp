@@ -4,109 +4,107 @@
 #include <cmath>
 
 #include "core/error.hpp"
+#include "grid/tet_lattice.hpp"
+#include "pipeline/assembly.hpp"
 #include "pipeline/effective_levels.hpp"
-#include "radapt/radapt2.hpp"
-#include "samr/samr2.hpp"
-#include "subdivide/subdivide2.hpp"
 
 namespace cisamr::pipeline {
 
-grid::Lattice2 make_lattice2(const geometry::Oracle2& oracle, const Options& options) {
-  const auto& scene = oracle.scene();
-  grid::Lattice2 lattice;
+template <int Dim>
+grid::Lattice<Dim> make_lattice(const geometry::SceneDesc& scene, const Options& options) {
+  grid::Lattice<Dim> lattice;
   lattice.h = scene.h;
   int levels = scene.levels;
-  for (int k = 0; k < oracle.inclusion_count(); ++k) levels = std::max(levels, oracle.levels_of(k));
+  for (const auto& inclusion : scene.inclusions) levels = std::max(levels, inclusion.levels);
   lattice.max_level = levels + std::max(0, options.extra_levels);
-  for (int d = 0; d < 2; ++d) {
-    lattice.origin[d] = scene.domain_min[static_cast<std::size_t>(d)];
-    const double cells = (scene.domain_max[static_cast<std::size_t>(d)] - scene.domain_min[static_cast<std::size_t>(d)]) / scene.h;
+  for (int d = 0; d < Dim; ++d) {
+    const auto axis = static_cast<std::size_t>(d);
+    lattice.origin[d] = scene.domain_min[axis];
+    const double cells = (scene.domain_max[axis] - scene.domain_min[axis]) / scene.h;
     lattice.coarse_cells[d] = static_cast<std::int64_t>(std::llround(cells));
     if (lattice.coarse_cells[d] < 1) throw InputError(scene.source, "mesh.h", "larger than the domain");
   }
+  if constexpr (Dim == 3) grid::require_key3(lattice);
   return lattice;
 }
 
-Result2 run2(const geometry::Oracle2& oracle, const grid::Lattice2& lattice, const grid::CellRange<2>& box,
-             int ghost, const Options& options, int partition_id, std::span<const int> levels) {
-  Result2 result;
-  Stats& stats = result.stats;
-  grid::CellRange<2> range = box;
-  for (int d = 0; d < 2; ++d) {
+template <int Dim>
+grid::CellRange<Dim> ghosted_range(const grid::Lattice<Dim>& lattice, const grid::CellRange<Dim>& box, int ghost) {
+  grid::CellRange<Dim> range = box;
+  for (int d = 0; d < Dim; ++d) {
     range.lo[d] = std::max<std::int64_t>(0, box.lo[d] - ghost);
     range.hi[d] = std::min<std::int64_t>(lattice.coarse_cells[d], box.hi[d] + ghost);
   }
-  samr::RefinedGrid2 grid = [&] {
-    ScopedPhase timer(&stats.times, "samr");
-    return samr::refine2(oracle, lattice, range, levels);
-  }();
-  stats.coarse_cells = grid.forest.root_count();
-  stats.refinements = grid.refinements;
-  stats.leaves = static_cast<std::int64_t>(grid.forest.size()) - grid.refinements;
+  return range;
+}
 
-  radapt::Nodes2 nodes = [&] {
-    ScopedPhase timer(&stats.times, "radapt");
-    return radapt::snap2(oracle, grid, radapt::Options{options.alpha});
-  }();
-  stats.lattice_nodes = static_cast<std::int64_t>(nodes.key.size());
-  stats.snapped_nodes = nodes.snapped_count;
-
-  subdivide::Triangles2 tris = [&] {
-    ScopedPhase timer(&stats.times, "subdivide");
-    return subdivide::subdivide2(oracle, grid, nodes, box, options.alpha);
-  }();
-  stats.cut_quads = tris.cut_quads;
-  stats.double_diagonal = tris.double_diagonal;
-  stats.hanging_cells = tris.hanging_cells;
-  stats.unresolved = tris.unresolved;
-  stats.collapsed = tris.collapsed;
-  stats.max_collapse_deviation = tris.max_collapse_deviation;
-  stats.max_collapse_ratio = tris.max_collapse_ratio;
-  stats.min_collapse_level = tris.collapsed ? tris.min_collapse_level : -1;
-  stats.max_level = lattice.max_level;
-
-  {
-    ScopedPhase timer(&stats.times, "assemble");
-    const auto& scene = oracle.scene();
-    const std::size_t lattice_count = nodes.key.size();
-    const std::size_t total = lattice_count + tris.extra_points.size();
-    std::vector<std::int32_t> new_id(total, -1);
-    mesh::Mesh2& m = result.mesh;
-    const std::size_t ntri = tris.phase.size();
-    m.cell_nodes.reserve(tris.triangles.size());
-    m.cell_phase.reserve(ntri);
-    std::int32_t next = 0;
-    for (std::size_t t = 0; t < ntri; ++t) {
-      const auto& phase = scene.phases[static_cast<std::size_t>(tris.phase[t])];
-      if (phase.is_void) continue;
-      for (int k = 0; k < 3; ++k) {
-        std::int32_t& id = new_id[static_cast<std::size_t>(tris.triangles[3 * t + static_cast<std::size_t>(k)])];
-        if (id < 0) id = next++;
-        m.cell_nodes.push_back(id);
-      }
-      m.cell_phase.push_back(phase.id);
+template <int Dim>
+void assemble(const geometry::SceneDesc& scene, MeshParts<Dim>&& parts, int partition_id, Result<Dim>& result) {
+  constexpr std::size_t corners = Dim + 1;
+  const std::size_t lattice_count = parts.lattice_key.size();
+  const std::size_t total = lattice_count + parts.extra_points.size();
+  std::vector<std::int32_t> new_id(total, -1);
+  const std::size_t cell_count = parts.phase.size();
+  std::size_t kept = 0;
+  std::int32_t next = 0;
+  for (std::size_t c = 0; c < cell_count; ++c) {
+    const auto& phase = scene.phases[static_cast<std::size_t>(parts.phase[c])];
+    if (phase.is_void) continue;
+    // Kept cells move down in place (kept ≤ c: nothing unread is overwritten).
+    for (std::size_t k = 0; k < corners; ++k) {
+      std::int32_t& id = new_id[static_cast<std::size_t>(parts.cells[corners * c + k])];
+      if (id < 0) id = next++;
+      parts.cells[corners * kept + k] = id;
     }
-    m.coords.resize(2 * static_cast<std::size_t>(next));
-    result.node_key.resize(static_cast<std::size_t>(next));
-    for (std::size_t n = 0; n < total; ++n) {
-      const std::int32_t id = new_id[n];
-      if (id < 0) continue;
-      result.node_key[static_cast<std::size_t>(id)] = n < lattice_count ? nodes.key[n] : Result2::kInteriorNode;
-      const Vec2& p = n < lattice_count ? nodes.position[n] : tris.extra_points[n - lattice_count];
-      m.coords[2 * static_cast<std::size_t>(id)] = p[0];
-      m.coords[2 * static_cast<std::size_t>(id) + 1] = p[1];
-    }
-    m.cell_partition.assign(m.cell_phase.size(), partition_id);
-    m.node_global_id.resize(static_cast<std::size_t>(next));
-    for (std::int32_t i = 0; i < next; ++i) m.node_global_id[static_cast<std::size_t>(i)] = i;
+    parts.phase[kept++] = phase.id;
   }
-  return result;
+  parts.cells.resize(corners * kept);
+  parts.phase.resize(kept);
+  mesh::SimplexMesh<Dim>& m = result.mesh;
+  m.cell_nodes = std::move(parts.cells);
+  m.cell_phase = std::move(parts.phase);
+  const auto nodes = static_cast<std::size_t>(next);
+  m.coords.resize(Dim * nodes);
+  result.node_identity.resize(nodes);
+  for (std::size_t n = 0; n < total; ++n) {
+    const std::int32_t id = new_id[n];
+    if (id < 0) continue;
+    const auto i = static_cast<std::size_t>(id);
+    if (n < lattice_count) {
+      if constexpr (Dim == 2)
+        result.node_identity[i] = parts.lattice_key[n];
+      else
+        result.node_identity[i] = {parts.lattice_key[n], parts.lattice_key[n]};
+    } else {
+      result.node_identity[i] =
+          parts.extra_identity.empty() ? Result<Dim>::kUnshared : parts.extra_identity[n - lattice_count];
+    }
+    const Vec<Dim>& p = n < lattice_count ? parts.lattice_position[n] : parts.extra_points[n - lattice_count];
+    for (int d = 0; d < Dim; ++d) m.coords[Dim * i + static_cast<std::size_t>(d)] = p[d];
+  }
+  m.cell_partition.assign(m.cell_phase.size(), partition_id);
+  m.node_global_id.resize(nodes);
+  for (std::size_t i = 0; i < nodes; ++i) m.node_global_id[i] = static_cast<GlobalId>(i);
 }
 
-Result2 mesh2(const geometry::Oracle2& oracle, const Options& options) {
-  const grid::Lattice2 lattice = make_lattice2(oracle, options);
+Result<2> mesh(const geometry::Oracle2& oracle, const Options& options) {
+  const grid::Lattice2 lattice = make_lattice<2>(oracle.scene(), options);
   const std::vector<int> levels = effective_levels2(oracle.scene(), lattice);
-  return run2(oracle, lattice, lattice.whole_domain(), 0, options, 0, levels);
+  return run(oracle, lattice, lattice.whole_domain(), 0, options, 0, levels);
 }
+
+Result<3> mesh(const geometry::Oracle3& oracle, const Options& options) {
+  const grid::Lattice3 lattice = make_lattice<3>(oracle.scene(), options);
+  const std::vector<int> levels =
+      effective_levels3(oracle.scene(), lattice, {}, surface_unions(oracle.scene()));
+  return run(oracle, lattice, lattice.whole_domain(), 0, options, 0, levels);
+}
+
+template grid::Lattice<2> make_lattice<2>(const geometry::SceneDesc&, const Options&);
+template grid::Lattice<3> make_lattice<3>(const geometry::SceneDesc&, const Options&);
+template grid::CellRange<2> ghosted_range<2>(const grid::Lattice<2>&, const grid::CellRange<2>&, int);
+template grid::CellRange<3> ghosted_range<3>(const grid::Lattice<3>&, const grid::CellRange<3>&, int);
+template void assemble<2>(const geometry::SceneDesc&, MeshParts<2>&&, int, Result<2>&);
+template void assemble<3>(const geometry::SceneDesc&, MeshParts<3>&&, int, Result<3>&);
 
 }  // namespace cisamr::pipeline

@@ -1,15 +1,23 @@
 #pragma once
-// The sequential mesher: box (+ghost) → grid → SAMR → r-adaptivity → subdivision → mesh.
+// The sequential mesher (README.md), 2D and 3D:
+//   2D: box (+ghost) → quad forest → SAMR → r-adaptivity → subdivision → mesh
+//   3D: box (+ghost) → tet forest → SAMR → r-adaptivity with the quality guard → face
+//       swapping → subdivision → mesh
 // The same call meshes the whole domain (one box, no ghost) or one partition's box with
 // its ghost layer; the parallel mesher runs it unchanged on every partition (DESIGN.md §3).
+#include <array>
 #include <cstdint>
 #include <span>
+#include <type_traits>
 #include <vector>
 
 #include "core/timer.hpp"
 #include "geometry/oracle2.hpp"
+#include "geometry/oracle3.hpp"
+#include "geometry/scene.hpp"
 #include "grid/lattice.hpp"
 #include "mesh/simplex_mesh.hpp"
+#include "pipeline/counters.hpp"
 
 namespace cisamr::pipeline {
 
@@ -24,40 +32,48 @@ struct Options {
   double swap_trigger3 = 3.0;  // corner tets above this aspect ratio look for a face swap (0: none)
 };
 
-struct Stats {
-  std::int64_t coarse_cells = 0, leaves = 0, refinements = 0;
-  std::int64_t lattice_nodes = 0, snapped_nodes = 0;
-  std::int64_t cut_quads = 0, double_diagonal = 0, hanging_cells = 0, unresolved = 0;
-  std::int64_t collapsed = 0;          // quads holding a feature below their resolution
-  double max_collapse_deviation = 0;   // largest node distance from a phase it serves
-  double max_collapse_ratio = 0;       // the same relative to the size of the collapsed cell
-  int min_collapse_level = -1;         // coarsest level of a collapse (-1: none)
-  int max_level = 0;                   // Lmax of the lattice
-  PhaseTimes times;
+// What identifies an output node across partitions. 2D: its lattice key (grid::key2).
+// 3D: (key, key) for a lattice node, its edge's (smaller key, larger key) for a cut node.
+template <int Dim>
+using NodeIdentity = std::conditional_t<Dim == 2, std::uint64_t, std::array<std::uint64_t, 2>>;
+
+template <int Dim>
+struct Result {
+  mesh::SimplexMesh<Dim> mesh;
+  // Per output node, its identity, computed alike by every partition: partitions merge
+  // nodes by it. kUnshared for points interior to one cell (2D points added by subdivision,
+  // 3D closure Steiner points), never on a partition face.
+  std::vector<NodeIdentity<Dim>> node_identity;
+  static constexpr NodeIdentity<Dim> kUnshared = [] {
+    if constexpr (Dim == 2)
+      return ~std::uint64_t{0};
+    else
+      return std::array<std::uint64_t, 2>{~std::uint64_t{0}, ~std::uint64_t{0}};
+  }();
+  Counters<Dim> counters;
+  PhaseTimes times;  // per stage: samr, radapt, (faceswap,) subdivide, assemble
 };
 
-struct Result2 {
-  mesh::Mesh2 mesh;
-  // Per output node: its lattice key (grid/lattice.hpp key2), or kInteriorNode for points
-  // created inside a cell (never on a partition face). Partitions merge nodes by key.
-  std::vector<std::uint64_t> node_key;
-  static constexpr std::uint64_t kInteriorNode = ~std::uint64_t{0};
-  Stats stats;
-};
-
-// The global lattice of a 2D scene: coarse cells of size h over the domain and
-// Lmax = max(requested levels) + extra_levels.
-grid::Lattice2 make_lattice2(const geometry::Oracle2& oracle, const Options& options);
+// The global lattice of a scene: coarse cells of size h over the domain and
+// Lmax = max(requested levels) + extra_levels. Throws InputError when h exceeds the
+// domain, and (3D) MeshingError when the lattice does not fit the 64-bit key.
+template <int Dim>
+grid::Lattice<Dim> make_lattice(const geometry::SceneDesc& scene, const Options& options);
 
 // Meshes the coarse cells of `box` (global coarse indices), using `ghost` extra coarse
 // cells on each side (clipped to the domain) so that decisions inside the box are those
 // of the whole-domain run. Cells of void phases are dropped; unused nodes removed.
 // `levels`: the level rule R1 asks of each of the oracle's inclusions, from
-// effective_levels2 over the whole scene (a partition's oracle holds a subset of it).
-Result2 run2(const geometry::Oracle2& oracle, const grid::Lattice2& lattice, const grid::CellRange<2>& box,
-             int ghost, const Options& options, int partition_id, std::span<const int> levels);
+// effective_levels2/3 over the whole scene (a partition's oracle holds a subset of it).
+Result<2> run(const geometry::Oracle2& oracle, const grid::Lattice<2>& lattice, const grid::CellRange<2>& box,
+              int ghost, const Options& options, int partition_id, std::span<const int> levels);
+Result<3> run(const geometry::Oracle3& oracle, const grid::Lattice<3>& lattice, const grid::CellRange<3>& box,
+              int ghost, const Options& options, int partition_id, std::span<const int> levels);
 
-// The whole domain in one box.
-Result2 mesh2(const geometry::Oracle2& oracle, const Options& options = {});
+// The whole domain in one box, with the levels effective_levels2/3 settle over the whole
+// scene (as every partition of the parallel mesher uses, so that one process and any
+// number of partitions mesh alike).
+Result<2> mesh(const geometry::Oracle2& oracle, const Options& options = {});
+Result<3> mesh(const geometry::Oracle3& oracle, const Options& options = {});
 
 }  // namespace cisamr::pipeline

@@ -1,6 +1,6 @@
 #pragma once
 // SAMR in 3D: refine the tet forest (nested honeycomb, grid/README.md 3D part) near
-// interfaces until the rules hold (lib/pipeline/README3.md):
+// interfaces until the rules hold (lib/pipeline/README.md):
 //   R1  a tet whose closed bounding box meets the boundary of inclusion k, at level < R_k,
 //       is refined;
 //   R2  a tet met by the boundaries of two interface groups, at level < Lmax, is refined;

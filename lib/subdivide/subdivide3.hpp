@@ -1,6 +1,6 @@
 #pragma once
 // Subdivision in 3D: every leaf of the refined, snapped tet forest becomes tetrahedra
-// (lib/pipeline/README3.md):
+// (lib/pipeline/README.md):
 //   - a leaf with hanging edge midpoints (never cut, never deformed: rule R4) is closed
 //     by the optimal case tables of templates3.hpp;
 //   - a leaf whose vertices share a phase is kept;

@@ -1,6 +1,6 @@
 // The 3D mesher (pipeline::mesh3) on analytic scenes: conformity, volume, phase fidelity,
 // every tetrahedron within the aspect-ratio bound 5, and the distribution (printed; see
-// lib/pipeline/README3.md).
+// lib/pipeline/README.md).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -12,7 +12,7 @@
 
 #include "geometry/oracle3.hpp"
 #include "mesh/metrics.hpp"
-#include "pipeline/pipeline3.hpp"
+#include "pipeline/pipeline.hpp"
 #include "quality/quality.hpp"
 
 using namespace cisamr;
@@ -44,7 +44,7 @@ Rotation3 rotation_xyz(double a, double b, double c) {
 constexpr double kBound = 5.0;  // DESIGN.md §2.2: every tetrahedron, no exception
 
 struct Outcome {
-  pipeline::Result3 result;
+  pipeline::Result<3> result;
   quality::AspectStats aspect;
   double inclusion_volume_error = 0;
 };
@@ -53,9 +53,9 @@ struct Outcome {
 // and is smooth, so the snapping guard has no reason to collapse a node (radapt/README.md).
 Outcome mesh_and_check(const std::string& name, const SceneDesc& scene, double volume_tolerance, bool interior = true) {
   const Oracle3 oracle(scene);
-  Outcome out{pipeline::mesh3_with_stats(oracle), {}};
+  Outcome out{pipeline::mesh(oracle), {}};
   const mesh::Mesh3& m = out.result.mesh;
-  const pipeline::Stats3& s = out.result.stats;
+  const pipeline::Counters<3>& s = out.result.counters;
   EXPECT_GT(m.cell_count(), 0u);
   EXPECT_EQ(s.unresolved, 0) << name;
   EXPECT_EQ(s.inverted, 0) << name;
@@ -131,10 +131,10 @@ Outcome mesh_and_check(const std::string& name, const SceneDesc& scene, double v
 TEST(Mesh3, BoxWithoutInclusionsIsTheHoneycomb) {
   const SceneDesc s = unit_box(0.25, 0);
   const Oracle3 oracle(s);
-  const auto r = pipeline::mesh3_with_stats(oracle);
+  const auto r = pipeline::mesh(oracle);
   EXPECT_EQ(r.mesh.cell_count(), 5u * 64u);  // five tets per cube, nothing refined
   EXPECT_EQ(r.mesh.node_count(), 125u);
-  EXPECT_EQ(r.stats.refinements, 0);
+  EXPECT_EQ(r.counters.refinements, 0);
   const auto a = quality::aspect_statistics<3>(r.mesh, 5.0);
   EXPECT_NEAR(a.max, 1.3660254, 1e-6);  // the corner tet
 }
@@ -143,8 +143,8 @@ TEST(Mesh3, SphereLevel0) {
   SceneDesc s = unit_box(0.1, 0);
   s.inclusions = {{Sphere{{0.51, 0.48, 0.53}, 0.27}, 2, 0}};
   const auto o = mesh_and_check("sphere-L0", s, 0.08);
-  EXPECT_EQ(o.result.stats.refinements, 0);
-  EXPECT_GT(o.result.stats.cut_tets, 0);
+  EXPECT_EQ(o.result.counters.refinements, 0);
+  EXPECT_GT(o.result.counters.cut_tets, 0);
   EXPECT_LE(o.aspect.max, kBound);
 }
 
@@ -152,8 +152,8 @@ TEST(Mesh3, SphereLevel1) {
   SceneDesc s = unit_box(0.1, 1);
   s.inclusions = {{Sphere{{0.51, 0.48, 0.53}, 0.27}, 2, 1}};
   const auto o = mesh_and_check("sphere-L1", s, 0.025);
-  EXPECT_GT(o.result.stats.refinements, 0);
-  EXPECT_GT(o.result.stats.closed_tets, 0);
+  EXPECT_GT(o.result.counters.refinements, 0);
+  EXPECT_GT(o.result.counters.closed_tets, 0);
   EXPECT_LE(o.aspect.max, kBound);
 }
 
@@ -230,13 +230,13 @@ constexpr std::uint64_t kSphereScenes = 6;
 struct MeshRun {
   double worst = 0;
   std::size_t above_3 = 0, above_5 = 0;
-  pipeline::Stats3 stats;
+  pipeline::Counters<3> counters;
   bool conforming = false;
 };
 
 MeshRun run(const SceneDesc& scene, const pipeline::Options& options) {
   const Oracle3 oracle(scene);
-  const auto r = pipeline::mesh3_with_stats(oracle, options);
+  const auto r = pipeline::mesh(oracle, options);
   MeshRun out;
   const auto a = quality::aspect_statistics<3>(r.mesh, 5.0);
   out.worst = a.max;
@@ -244,7 +244,7 @@ MeshRun run(const SceneDesc& scene, const pipeline::Options& options) {
   for (std::size_t i = 0; i + 1 < a.bin_edges.size(); ++i)
     if (a.bin_edges[i] >= 3.0 - 1e-9) out.above_3 += a.histogram[i];
   out.above_3 += a.histogram.back();
-  out.stats = r.stats;
+  out.counters = r.counters;
   out.conforming = quality::check_conformity(r.mesh, Box3{{0, 0, 0}, {1, 1, 1}}, 1.0, false).ok;
   return out;
 }
@@ -269,7 +269,7 @@ TEST(SnapGuard3, RemovesEveryTetAboveTheBound) {
     EXPECT_EQ(guarded.above_5, 0u) << "seed " << seed;
     EXPECT_LE(guarded.worst, 5.0) << "seed " << seed;
     EXPECT_TRUE(guarded.conforming) << "seed " << seed;
-    EXPECT_EQ(guarded.stats.collapsed_nodes, 0) << "seed " << seed << ": interior spheres need no collapse";
+    EXPECT_EQ(guarded.counters.collapsed_nodes, 0) << "seed " << seed << ": interior spheres need no collapse";
   }
   std::printf("[guard] unguarded: %zu tets above 5 over %d scenes (worst %.1f); guarded: none\n", unguarded_above,
               static_cast<int>(kSphereScenes), unguarded_worst);
@@ -285,8 +285,8 @@ TEST(SnapGuard3, CollapsesOnlyWhatTheLatticeCannotResolve) {
   const MeshRun r = run(s, pipeline::Options{});
   EXPECT_EQ(r.above_5, 0u);
   EXPECT_TRUE(r.conforming);
-  EXPECT_GT(r.stats.collapsed_nodes, 0);
-  EXPECT_LE(r.stats.max_collapse_deviation, 0.05);  // one cell of level 1
+  EXPECT_GT(r.counters.collapsed_nodes, 0);
+  EXPECT_LE(r.counters.max_collapse_deviation, 0.05);  // one cell of level 1
 }
 
 // Face swapping repairs sliver/cap pairs: never a worse mesh, fewer tets above 3, conforming.
@@ -302,8 +302,8 @@ TEST(FaceSwap3, ImprovesAndStaysConforming) {
     EXPECT_TRUE(with.conforming) << "seed " << seed;
     EXPECT_LE(with.worst, without.worst + 1e-12) << "seed " << seed;
     above_3_without += without.above_3, above_3_with += with.above_3;
-    swaps += with.stats.face_swaps;
-    EXPECT_EQ(without.stats.face_swaps, 0);
+    swaps += with.counters.face_swaps;
+    EXPECT_EQ(without.counters.face_swaps, 0);
   }
   std::printf("[faceswap] %lld swaps; tets above 3: %zu without, %zu with\n", static_cast<long long>(swaps),
               above_3_without, above_3_with);

@@ -113,7 +113,7 @@ inline RunOutcome run_sequential(const geometry::SceneDesc& scene) {
   RunOutcome out;
   try {
     const geometry::Oracle2 oracle(scene);
-    out.mesh = pipeline::mesh2(oracle).mesh;
+    out.mesh = pipeline::mesh(oracle).mesh;
     out.checksum = mesh_checksum2(out.mesh);
   } catch (const std::exception& e) {
     out.failed = true;
@@ -130,7 +130,7 @@ inline RunOutcome run_parallel(const Comm& comm, const geometry::SceneDesc& scen
   options.partitions = partitions;
   options.ghost = rule;
   try {
-    out.distributed = mesh2_distributed(comm, scene, options);
+    out.distributed = mesh_distributed<2>(comm, scene, options);
     out.checksum = mesh_checksum2(comm, out.distributed.piece.mesh);
     out.mesh = gather_mesh2(comm, out.distributed.piece);
   } catch (const std::exception& e) {

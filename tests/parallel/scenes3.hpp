@@ -14,7 +14,7 @@
 #include "parallel/distributed.hpp"
 #include "parallel/merge.hpp"
 #include "pipeline/effective_levels.hpp"
-#include "pipeline/pipeline3.hpp"
+#include "pipeline/pipeline.hpp"
 #include "quality/quality.hpp"
 
 namespace cisamr::parallel::testing {
@@ -207,19 +207,19 @@ struct RunOutcome3 {
   std::string error;
   mesh::Mesh3 mesh;     // gathered on rank 0 (parallel) or the sequential mesh
   std::uint64_t checksum = 0;
-  pipeline::Stats3 stats;  // sequential: the whole-domain run's counters
+  pipeline::Counters<3> counters;  // sequential: the whole-domain run's counters
   DistributedMesh3 distributed;
 };
 
-// The sequential mesher (pipeline::mesh3_with_stats, what `cisamr mesh` runs without
+// The sequential mesher (pipeline::mesh, what `cisamr mesh` runs without
 // --partitions), STL files read first.
 inline RunOutcome3 run_sequential3(const geometry::SceneDesc& scene, const pipeline::Options& options = {}) {
   RunOutcome3 out;
   try {
     const geometry::Oracle3 oracle(with_triangles(scene));
-    pipeline::Result3 r = pipeline::mesh3_with_stats(oracle, options);
+    pipeline::Result<3> r = pipeline::mesh(oracle, options);
     out.mesh = std::move(r.mesh);
-    out.stats = r.stats;
+    out.counters = r.counters;
     out.checksum = mesh_checksum3(out.mesh);
   } catch (const std::exception& e) {
     out.failed = true;
@@ -237,7 +237,7 @@ inline RunOutcome3 run_parallel3(const Comm& comm, const geometry::SceneDesc& sc
   options.ghost = rule;
   options.pipeline = pipeline;
   try {
-    out.distributed = mesh3_distributed(comm, scene, options);
+    out.distributed = mesh_distributed<3>(comm, scene, options);
     out.checksum = mesh_checksum3(comm, out.distributed.piece.mesh);
     out.mesh = gather_mesh<3>(comm, out.distributed.piece);
   } catch (const std::exception& e) {

@@ -267,7 +267,7 @@ TEST(Merge, DifferentCoordinatesForOneKeyAreABug) {
     r.mesh.coords = {x0, 0, x1, 0, x1, 1, x0, 1};
     r.mesh.cell_nodes = {0, 1, 2, 0, 2, 3};
     r.mesh.cell_phase = {1, 1};
-    r.node_key = {grid::key2(p, 0), grid::key2(p + 1, 0), grid::key2(p + 1, 1), grid::key2(p, 1)};
+    r.node_identity = {grid::key2(p, 0), grid::key2(p + 1, 0), grid::key2(p + 1, 1), grid::key2(p, 1)};
   }
   {
     auto copy = parts;
@@ -316,7 +316,7 @@ TEST(Collective, SubsetOracleErrorsNameSceneIndices) {
   MeshOptions options;
   options.partitions = 1;
   try {
-    mesh2_distributed(kSerial, scene, options);
+    mesh_distributed<2>(kSerial, scene, options);
   } catch (const InputError& e) {
     parallel = e.what();
   }
@@ -327,7 +327,7 @@ TEST(Collective, SubsetOracleErrorsNameSceneIndices) {
 TEST(Collective, TooFewPartitionsForTheRanksIsAnInputError) {
   MeshOptions options;
   options.partitions = 0;
-  EXPECT_THROW(mesh2_distributed(kSerial, testing::corner_scene(), options), CollectiveInputError);
+  EXPECT_THROW(mesh_distributed<2>(kSerial, testing::corner_scene(), options), CollectiveInputError);
 }
 
 class TempDir {

@@ -1,6 +1,6 @@
 // lib/parallel in 3D through the serial Comm: effective_levels3, the 3D ghost margin,
 // partition invariance for (1 rank, 1, 7 and 64 partitions) against the sequential mesher
-// (pipeline::mesh3_with_stats) on dense scenes where the guard refuses and collapses and
+// (pipeline::mesh) on dense scenes where the guard refuses and collapses and
 // face swaps happen near partition faces and corners, a ghost too small to be exact, the
 // merge of cut nodes, the STL files read in shares, and errors in them.
 // test_parallel3_mpi.cpp runs the invariance on 2-4 ranks.
@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "grid/tet_lattice.hpp"
 #include "io/scene_io.hpp"
 #include "parallel/collective.hpp"
 #include "parallel/output.hpp"
@@ -126,9 +127,9 @@ TEST_P(Invariance3, DenseScenes) {
     expect_invariant3(seq, par, c.scene);
     // What the scene is for: the guard refuses and collapses, faces are swapped, and with
     // several partitions inclusions straddle their corners.
-    EXPECT_GT(seq.stats.refused_nodes, 0);
-    EXPECT_GT(seq.stats.collapsed_nodes, 0);
-    EXPECT_GT(seq.stats.face_swaps, 10);
+    EXPECT_GT(seq.counters.refused_nodes, 0);
+    EXPECT_GT(seq.counters.collapsed_nodes, 0);
+    EXPECT_GT(seq.counters.face_swaps, 10);
     straddled += testing::straddled_corners3(par.distributed, c.scene);
   }
   if (n > 1) {
@@ -258,7 +259,7 @@ TEST(LazyStl, SceneFileWithStlSurfacesMeshesAsSequential) {
   ASSERT_FALSE(seq.failed) << seq.error;
   MeshOptions options;
   options.partitions = 16;
-  const DistributedMesh3 dm = mesh3_distributed(kSerial, path, options);
+  const DistributedMesh3 dm = mesh_distributed<3>(kSerial, path, options);
   EXPECT_EQ(mesh_checksum3(dm.piece.mesh), seq.checksum);
   EXPECT_EQ(dm.stl_files_read, 2);  // one rank: its share is every file, kept for the kernel
   // The two surfaces are 2 apart: some partition does not load both.
@@ -282,7 +283,7 @@ TEST(LazyStl, BadFilesAreInputErrors) {
     try {
       MeshOptions options;
       options.partitions = 3;
-      mesh3_distributed(kSerial, path, options);
+      mesh_distributed<3>(kSerial, path, options);
     } catch (const CollectiveInputError& e) {
       return std::string(e.what());
     }

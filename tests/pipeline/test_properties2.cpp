@@ -37,7 +37,7 @@ bool has_void(const geometry::SceneDesc& s) {
 // sharp wedges): there a node may serve a phase within the reported deviation, which is
 // at most 1.5 cells of that quad's level, and only collapsed quads' corners may need it.
 ::testing::AssertionResult mesh_is_certified(const geometry::Oracle2& oracle, const mesh::Mesh2& m,
-                                             const pipeline::Stats* stats = nullptr) {
+                                             const pipeline::Counters<2>* counters = nullptr) {
   const auto& s = oracle.scene();
   const Box2 box = domain_box(s);
   const double area = (box.max[0] - box.min[0]) * (box.max[1] - box.min[1]);
@@ -66,14 +66,14 @@ bool has_void(const geometry::SceneDesc& s) {
     for (const auto& e : f.examples) r << "\n  " << e;
     return r;
   };
-  if (!stats || stats->collapsed == 0) return failure(fidelity, "phase fidelity violated");
-  if (stats->max_collapse_ratio > 1.5 * (1 + 1e-9))
-    return ::testing::AssertionFailure() << "collapse deviation " << stats->max_collapse_ratio
+  if (!counters || counters->collapsed == 0) return failure(fidelity, "phase fidelity violated");
+  if (counters->max_collapse_ratio > 1.5 * (1 + 1e-9))
+    return ::testing::AssertionFailure() << "collapse deviation " << counters->max_collapse_ratio
                                          << " cells > 1.5 cells of the collapsed quad's level";
   const std::size_t off = fidelity.nodes_off_phase + fidelity.interface_nodes_off_interface + fidelity.boundary_nodes_off_void;
-  if (off > 4 * static_cast<std::size_t>(stats->collapsed))
+  if (off > 4 * static_cast<std::size_t>(counters->collapsed))
     return failure(fidelity, "more nodes off their phase than collapsed quads can explain");
-  const auto relaxed = quality::check_fidelity(m, oracle, std::max(tol, stats->max_collapse_deviation * (1 + 1e-9)));
+  const auto relaxed = quality::check_fidelity(m, oracle, std::max(tol, counters->max_collapse_deviation * (1 + 1e-9)));
   if (!relaxed.ok) return failure(relaxed, "phase fidelity violated beyond the collapse deviation");
   return ::testing::AssertionSuccess();
 }
@@ -86,10 +86,10 @@ TEST_P(RandomScenes2, MeshIsConformingBoundedAndFaithful) {
     SCOPED_TRACE("seed " + std::to_string(seed));
     const geometry::SceneDesc scene = testing::RandomScene2(seed).make();
     const geometry::Oracle2 oracle(scene);
-    const auto result = pipeline::mesh2(oracle);
+    const auto result = pipeline::mesh(oracle);
     ASSERT_GT(result.mesh.cell_count(), 0u);
-    EXPECT_EQ(result.stats.unresolved, 0);
-    EXPECT_TRUE(mesh_is_certified(oracle, result.mesh, &result.stats));
+    EXPECT_EQ(result.counters.unresolved, 0);
+    EXPECT_TRUE(mesh_is_certified(oracle, result.mesh, &result.counters));
   }
 }
 
@@ -100,7 +100,7 @@ INSTANTIATE_TEST_SUITE_P(Seeds, RandomScenes2, ::testing::Values(1000u, 2000u, 3
 TEST(Pipeline2, IsDeterministic) {
   const geometry::SceneDesc scene = testing::RandomScene2(77).make();
   const geometry::Oracle2 oracle(scene);
-  const auto a = pipeline::mesh2(oracle), b = pipeline::mesh2(oracle);
+  const auto a = pipeline::mesh(oracle), b = pipeline::mesh(oracle);
   EXPECT_EQ(a.mesh.coords, b.mesh.coords);
   EXPECT_EQ(a.mesh.cell_nodes, b.mesh.cell_nodes);
   EXPECT_EQ(a.mesh.cell_phase, b.mesh.cell_phase);
@@ -118,7 +118,7 @@ TEST(Pipeline2, ChecksCatchBrokenMeshes) {
   scene.phases = {{1, "matrix", false}, {2, "particle", false}};
   scene.inclusions.push_back({geometry::Circle{{5.1, 4.9}, 2.7}, 2, 1});
   const geometry::Oracle2 oracle(scene);
-  const auto good = pipeline::mesh2(oracle).mesh;
+  const auto good = pipeline::mesh(oracle).mesh;
   ASSERT_TRUE(mesh_is_certified(oracle, good));
 
   // A node shared by both phases moved off the interface.

@@ -12,7 +12,7 @@
 //     close to the exact one (10 % on smooth interfaces, first-order slack on sharp ones),
 //     and on smooth ones (spheres and ellipsoids, none clipped or touching) no tet in
 //     another phase and no centroid beyond check_fidelity's strict slack. Sharp edges and
-//     corners are chamfered by up to a cell (no feature matching: lib/pipeline/README3.md),
+//     corners are chamfered by up to a cell (no feature matching: lib/pipeline/README.md),
 //     so tets there may straddle them.
 // Prints a summary per shard and over every scene that ran: worst aspect ratio and its seed,
 // dihedral extremes, face swaps, collapsed nodes, volume errors, by scene kind.
@@ -34,7 +34,7 @@
 #include "geometry/oracle3.hpp"
 #include "io/stl_io.hpp"
 #include "mesh/metrics.hpp"
-#include "pipeline/pipeline3.hpp"
+#include "pipeline/pipeline.hpp"
 #include "quality/quality.hpp"
 #include "random_scenes3.hpp"
 
@@ -215,11 +215,11 @@ void check_scene(std::uint64_t seed, Summary& sum) {
   }
   using Clock = std::chrono::steady_clock;
   const auto t0 = Clock::now();
-  const auto r = pipeline::mesh3_with_stats(*oracle);
+  const auto r = pipeline::mesh(*oracle);
   const auto t1 = Clock::now();
   const mesh::Mesh3& m = r.mesh;
   ASSERT_GT(m.cell_count(), 0u);
-  EXPECT_EQ(r.stats.inverted, 0);
+  EXPECT_EQ(r.counters.inverted, 0);
 
   // Conformity. With voids the expected volume is the box minus the meshed voids' exact
   // volume, up to their discretisation error.
@@ -254,10 +254,10 @@ void check_scene(std::uint64_t seed, Summary& sum) {
   // part of the check is meaningful on smooth, resolved interfaces only.
   const double tol = quality::default_fidelity_tolerance(scene);
   const double coarse_diagonal = scene.h * std::sqrt(3.0);
-  EXPECT_LE(r.stats.max_collapse_deviation, coarse_diagonal) << "a collapse moved an interface by more than a cell";
-  const double relaxed_tol = std::max(tol, r.stats.max_collapse_deviation * (1 + 1e-9));
+  EXPECT_LE(r.counters.max_collapse_deviation, coarse_diagonal) << "a collapse moved an interface by more than a cell";
+  const double relaxed_tol = std::max(tol, r.counters.max_collapse_deviation * (1 + 1e-9));
   const auto fidelity = quality::check_fidelity(m, *oracle, relaxed_tol, exact, tol);
-  EXPECT_LE(fidelity.nodes_beyond_strict, static_cast<std::size_t>(r.stats.collapsed_nodes + r.stats.collapsed_cut_points))
+  EXPECT_LE(fidelity.nodes_beyond_strict, static_cast<std::size_t>(r.counters.collapsed_nodes + r.counters.collapsed_cut_points))
       << "more nodes off their phase than the guard collapsed: " << fidelity_text(fidelity);
   const std::size_t off =
       fidelity.nodes_off_phase + fidelity.interface_nodes_off_interface + fidelity.boundary_nodes_off_void;
@@ -289,10 +289,10 @@ void check_scene(std::uint64_t seed, Summary& sum) {
     k.worst_volume_error = std::max(k.worst_volume_error, worst_volume_error);
     if (gen.smooth()) k.worst_centroid_ratio = std::max(k.worst_centroid_ratio, fidelity.max_centroid_ratio);
   }
-  k.swaps += r.stats.face_swaps;
-  k.collapsed += r.stats.collapsed_nodes;
-  k.unresolved_leaves += r.stats.unresolved;
-  k.max_collapse_cells = std::max(k.max_collapse_cells, r.stats.max_collapse_deviation / scene.h);
+  k.swaps += r.counters.face_swaps;
+  k.collapsed += r.counters.collapsed_nodes;
+  k.unresolved_leaves += r.counters.unresolved;
+  k.max_collapse_cells = std::max(k.max_collapse_cells, r.counters.max_collapse_deviation / scene.h);
   sum.min_dihedral = std::min(sum.min_dihedral, aspect.min_angle_deg);
   sum.max_dihedral = std::max(sum.max_dihedral, aspect.max_angle_deg);
   if (verbose)
@@ -300,8 +300,8 @@ void check_scene(std::uint64_t seed, Summary& sum) {
                 "(%.3g), features %.1f cells%s, volume error %.2e, centroid ratio %.3f; ms: mesh %.0f volumes %.0f "
                 "conformity %.0f fidelity %.0f: %s\n",
                 static_cast<unsigned long long>(seed), kind.c_str(), m.cell_count(), aspect.max, aspect.min_angle_deg,
-                aspect.max_angle_deg, static_cast<long long>(r.stats.face_swaps),
-                static_cast<long long>(r.stats.collapsed_nodes), r.stats.max_collapse_deviation,
+                aspect.max_angle_deg, static_cast<long long>(r.counters.face_swaps),
+                static_cast<long long>(r.counters.collapsed_nodes), r.counters.max_collapse_deviation,
                 gen.min_feature_cells(), gen.smooth() ? ", smooth" : "", worst_volume_error, fidelity.max_centroid_ratio,
                 ms(t1 - t0), ms(t2 - t1), ms(t3 - t2), ms(t4 - t3), describe(scene).c_str());
 }
@@ -342,18 +342,18 @@ TEST(Pipeline3, IsDeterministic) {
     testing::RandomScene3 gen(seed, shapes());
     const geometry::SceneDesc scene = gen.make();
     const geometry::Oracle3 oracle(scene), other(scene);
-    const auto a = pipeline::mesh3_with_stats(oracle);
-    const auto b = pipeline::mesh3_with_stats(oracle);
-    const auto c = pipeline::mesh3_with_stats(other);
+    const auto a = pipeline::mesh(oracle);
+    const auto b = pipeline::mesh(oracle);
+    const auto c = pipeline::mesh(other);
     ASSERT_GT(a.mesh.cell_count(), 0u);
     for (const auto* r : {&b, &c}) {
       EXPECT_EQ(a.mesh.coords, r->mesh.coords);
       EXPECT_EQ(a.mesh.cell_nodes, r->mesh.cell_nodes);
       EXPECT_EQ(a.mesh.cell_phase, r->mesh.cell_phase);
     }
-    swaps += a.stats.face_swaps;
-    refused += a.stats.refused_nodes;
-    collapsed += a.stats.collapsed_nodes;
+    swaps += a.counters.face_swaps;
+    refused += a.counters.refused_nodes;
+    collapsed += a.counters.collapsed_nodes;
   }
   EXPECT_GT(swaps, 0);
   EXPECT_GT(refused, 0);

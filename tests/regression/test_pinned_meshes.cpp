@@ -23,7 +23,6 @@
 #include "io/stl_io.hpp"
 #include "parallel/checksum.hpp"
 #include "pipeline/pipeline.hpp"
-#include "pipeline/pipeline3.hpp"
 #include "pipeline3/random_scenes3.hpp"
 #include "support/random_scenes.hpp"
 
@@ -51,8 +50,8 @@ Pin pin_of(const Mesh& m) {
 }
 
 Pin mesh_scene(const geometry::SceneDesc& scene) {
-  if (scene.dimension == 2) return pin_of(pipeline::mesh2(geometry::Oracle2(scene)).mesh);
-  return pin_of(pipeline::mesh3_with_stats(geometry::Oracle3(scene)).mesh);
+  if (scene.dimension == 2) return pin_of(pipeline::mesh(geometry::Oracle2(scene)).mesh);
+  return pin_of(pipeline::mesh(geometry::Oracle3(scene)).mesh);
 }
 
 // Every pinned case, by name, in a fixed order.
@@ -117,7 +116,7 @@ TEST(PinnedMeshes, ExamplesAndSeededScenesUnchanged) {
 TEST(PinnedMeshes, ChecksumSeesOneBit) {
   const auto cases = pinned_scenes();
   const geometry::SceneDesc& scene = cases[4].second;  // random2d-1
-  auto m = pipeline::mesh2(geometry::Oracle2(scene)).mesh;
+  auto m = pipeline::mesh(geometry::Oracle2(scene)).mesh;
   const Pin before = pin_of(m);
   std::uint64_t bits;
   std::memcpy(&bits, &m.coords[0], sizeof bits);

@@ -15,7 +15,7 @@ TEST(Samr2, RulesHoldOnRandomScenes) {
     SCOPED_TRACE("seed " + std::to_string(seed));
     const auto scene = testing::RandomScene2(seed).make();
     const geometry::Oracle2 oracle(scene);
-    const auto lattice = pipeline::make_lattice2(oracle, {});
+    const auto lattice = pipeline::make_lattice<2>(oracle.scene(), {});
     const auto g = samr::refine2(oracle, lattice, lattice.whole_domain());
     const auto& f = g.forest;
     std::size_t cut = 0;

@@ -92,14 +92,14 @@ int main(int argc, char** argv) {
               scene.domain_max[0] - scene.domain_min[0], scene.domain_max[1] - scene.domain_min[1], scene.h, scene.levels);
   std::printf("oracle (validation + AABB tree): %.3f s\n", oracle_s);
   double best = 1e300;
-  pipeline::Result2 result;
+  pipeline::Result<2> result;
   for (int r = 0; r < repeat; ++r) {
     const auto t = std::chrono::steady_clock::now();
-    result = pipeline::mesh2(oracle);
+    result = pipeline::mesh(oracle);
     const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
     best = std::min(best, s);
     std::printf("run %d: %.3f s (", r + 1, s);
-    for (const auto& [name, sec] : result.stats.times.phases()) std::printf(" %s %.3f", name.c_str(), sec);
+    for (const auto& [name, sec] : result.times.phases()) std::printf(" %s %.3f", name.c_str(), sec);
     std::printf(" )\n");
   }
   const auto aspect = quality::aspect_statistics(result.mesh, 3.0);
@@ -107,7 +107,7 @@ int main(int argc, char** argv) {
   getrusage(RUSAGE_SELF, &ru);
   const double tri = static_cast<double>(result.mesh.cell_count());
   std::printf("triangles: %.0f, nodes: %zu, max aspect ratio %.3f, above 3: %zu, unresolved quads: %lld\n", tri,
-              result.mesh.node_count(), aspect.max, aspect.above_bound, static_cast<long long>(result.stats.unresolved));
+              result.mesh.node_count(), aspect.max, aspect.above_bound, static_cast<long long>(result.counters.unresolved));
   std::printf("best of %d: %.3f s, %.2f M triangles/s (one core, writing excluded)\n", repeat, best, tri / best / 1e6);
   std::printf("peak memory (max RSS): %.1f MiB, %.0f bytes per triangle\n", ru.ru_maxrss / 1024.0,
               ru.ru_maxrss * 1024.0 / tri);

@@ -30,7 +30,7 @@ int main(int argc, char** argv) {
     scene.h = h;
     const geometry::Oracle2 oracle(scene);
     const auto exact = oracle.phase_areas();
-    const auto result = pipeline::mesh2(oracle);
+    const auto result = pipeline::mesh(oracle);
     const auto& m = result.mesh;
     std::vector<double> area(scene.phases.size(), 0);
     for (std::size_t c = 0; c < m.cell_count(); ++c) {

@@ -28,7 +28,7 @@
 #include "geometry/oracle3.hpp"
 #include "io/scene_io.hpp"
 #include "mesh/metrics.hpp"
-#include "pipeline/pipeline3.hpp"
+#include "pipeline/pipeline.hpp"
 
 using namespace cisamr;
 
@@ -113,7 +113,7 @@ Row run(geometry::SceneDesc scene, double h, const std::vector<double>& exact_gi
       throw std::logic_error(scene.source + ": the oracle's phase volume " + std::to_string(from_oracle[p]) +
                              " differs from the analytic " + std::to_string(exact[p]));
   const auto start = std::chrono::steady_clock::now();
-  const pipeline::Result3 result = pipeline::mesh3_with_stats(oracle);
+  const pipeline::Result<3> result = pipeline::mesh(oracle);
   Row row;
   row.h = h;
   row.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

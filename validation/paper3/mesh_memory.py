@@ -65,7 +65,7 @@ def main():
         return code
     with open(report) as f:
         r = json.load(f)
-    phases = [(name, t["max"]) for name, t in r["timings_s"].items()]
+    phases = [(name, t["max"]) for name, t in r["timings_s"].items() if name != "total"]
     # timings_s is a JSON object: restore the pipeline's order.
     order = ["samr", "radapt", "faceswap", "subdivide", "assemble", "quality", "write"]
     phases.sort(key=lambda p: order.index(p[0]) if p[0] in order else len(order))

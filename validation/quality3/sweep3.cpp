@@ -14,7 +14,7 @@
 #include <cstdlib>
 
 #include "geometry/oracle3.hpp"
-#include "pipeline/pipeline3.hpp"
+#include "pipeline/pipeline.hpp"
 #include "quality/quality.hpp"
 
 using namespace cisamr;
@@ -90,8 +90,8 @@ int main(int argc, char** argv) {
     if (const char* a = std::getenv("SWEEP_BOUND")) options.bound3 = std::atof(a);
     if (const char* a = std::getenv("SWEEP_CANDIDATES")) options.max_candidates3 = std::atoi(a);
     if (const char* a = std::getenv("SWEEP_SWAP")) options.swap_trigger3 = std::atof(a);
-    const auto r = pipeline::mesh3_with_stats(oracle, options);
-    for (const auto& [name, sec] : r.stats.times.phases()) phase_seconds[name] += sec;
+    const auto r = pipeline::mesh(oracle, options);
+    for (const auto& [name, sec] : r.times.phases()) phase_seconds[name] += sec;
     {
       const Box3 domain{{scene.domain_min[0], scene.domain_min[1], scene.domain_min[2]},
                         {scene.domain_max[0], scene.domain_max[1], scene.domain_max[2]}};
@@ -113,24 +113,24 @@ int main(int argc, char** argv) {
     }
     above += static_cast<long long>(a.above_bound);
     bad_scenes += a.above_bound > 0 ? 1 : 0;
-    kept_above += r.stats.kept_above_5;
-    split_above += r.stats.split_above_5;
-    inverted += r.stats.inverted;
-    swaps += r.stats.face_swaps;
-    snapped += r.stats.snapped_nodes, refused += r.stats.refused_nodes, collapsed += r.stats.collapsed_nodes;
-    guarded += r.stats.guarded_leaves, combinations += r.stats.guard_combinations, unresolved += r.stats.unresolved;
-    max_deviation = std::max(max_deviation, r.stats.max_collapse_deviation);
-    deviation_cells = std::max(deviation_cells, r.stats.max_collapse_deviation / (h / (1 << scene.levels)));
-    worst_kept = std::max(worst_kept, r.stats.worst_kept);
-    worst_split = std::max(worst_split, r.stats.worst_split);
-    worst_closure = std::max(worst_closure, r.stats.worst_closure);
+    kept_above += r.counters.kept_above_5;
+    split_above += r.counters.split_above_5;
+    inverted += r.counters.inverted;
+    swaps += r.counters.face_swaps;
+    snapped += r.counters.snapped_nodes, refused += r.counters.refused_nodes, collapsed += r.counters.collapsed_nodes;
+    guarded += r.counters.guarded_leaves, combinations += r.counters.guard_combinations, unresolved += r.counters.unresolved;
+    max_deviation = std::max(max_deviation, r.counters.max_collapse_deviation);
+    deviation_cells = std::max(deviation_cells, r.counters.max_collapse_deviation / (h / (1 << scene.levels)));
+    worst_kept = std::max(worst_kept, r.counters.worst_kept);
+    worst_split = std::max(worst_split, r.counters.worst_split);
+    worst_closure = std::max(worst_closure, r.counters.worst_closure);
     min_angle = std::min(min_angle, a.min_angle_deg);
     max_angle = std::max(max_angle, a.max_angle_deg);
     if (a.max > worst) worst = a.max, worst_seed = seed;
     if (argc > 4 && a.above_bound > 0) {
       std::printf("seed %llu (levels %d): %zu tets, max %.3f, above 5: %zu, refused %lld of %lld snaps:",
                   static_cast<unsigned long long>(seed), scene.levels, r.mesh.cell_count(), a.max, a.above_bound,
-                  static_cast<long long>(r.stats.refused_nodes), static_cast<long long>(r.stats.snapped_nodes));
+                  static_cast<long long>(r.counters.refused_nodes), static_cast<long long>(r.counters.snapped_nodes));
       for (const auto& inc : scene.inclusions) {
         if (const auto* sp = std::get_if<Sphere>(&inc.shape)) std::printf(" sphere r %.3f;", sp->radius);
         if (const auto* e = std::get_if<Ellipsoid>(&inc.shape))

@@ -18,7 +18,7 @@
 #include "core/error.hpp"
 #include "geometry/oracle3.hpp"
 #include "mesh/metrics.hpp"
-#include "pipeline/pipeline3.hpp"
+#include "pipeline/pipeline.hpp"
 #include "quality/quality.hpp"
 
 namespace cisamr::tetgen_ref {
@@ -438,7 +438,7 @@ Comparison compare3(const geometry::SceneDesc& scene, const CompareOptions& opti
     const auto oracle_start = start;
     const geometry::Oracle3 oracle(scene);
     const double oracle_seconds = seconds_since(oracle_start);
-    pipeline::Result3 result = pipeline::mesh3_with_stats(oracle, options.cisamr);
+    pipeline::Result<3> result = pipeline::mesh(oracle, options.cisamr);
     const double seconds = seconds_since(start);
     const double cpu = cpu_seconds_now() - cpu_start;
     memory.stop();
@@ -449,11 +449,11 @@ Comparison compare3(const geometry::SceneDesc& scene, const CompareOptions& opti
     r.seconds = seconds;
     r.tets_per_second = seconds > 0 ? static_cast<double>(r.tets) / seconds : 0;
     r.phase_seconds.emplace_back("oracle", oracle_seconds);
-    for (const auto& phase : result.stats.times.phases()) r.phase_seconds.push_back(phase);
+    for (const auto& phase : result.times.phases()) r.phase_seconds.push_back(phase);
     r.peak_rss_delta_bytes = memory.delta_bytes();
     r.bytes_per_tet = r.tets > 0 ? r.peak_rss_delta_bytes / static_cast<double>(r.tets) : 0;
     r.memory_method = memory.method(options.isolate);
-    const pipeline::Stats3& s = result.stats;
+    const pipeline::Counters<3>& s = result.counters;
     r.extra = {{"leaves", double(s.leaves)},          {"cut_tets", double(s.cut_tets)},
                {"snapped_nodes", double(s.snapped_nodes)}, {"face_swaps", double(s.face_swaps)},
                {"collapsed_nodes", double(s.collapsed_nodes)}, {"refused_nodes", double(s.refused_nodes)},

@@ -1,5 +1,5 @@
 #pragma once
-// Side by side: one 3D scene meshed by our mesher (pipeline::mesh3_with_stats) and by TetGen
+// Side by side: one 3D scene meshed by our mesher (pipeline::mesh) and by TetGen
 // (tetgen_mesh.hpp), with the same measurements for both: tetrahedra, wall time, peak
 // memory, per-phase and per-inclusion volume error, aspect-ratio distribution (DESIGN.md §2
 // definition), dihedral angles, conformity. Used by validation/bench/bench_mesh3 and by

@@ -1,0 +1,202 @@
+#include "driver/driver.hpp"
+
+#include <algorithm>
+#include <filesystem>
+#include <type_traits>
+#include <utility>
+
+#include "core/error.hpp"
+#include "geometry/oracle2.hpp"
+#include "geometry/oracle3.hpp"
+#include "io/mesh_io.hpp"
+#include "io/mesh_svg.hpp"
+#include "io/scene_io.hpp"
+#include "mesh/metrics.hpp"
+#include "parallel/checksum.hpp"
+#include "parallel/collective.hpp"
+#include "parallel/merge.hpp"
+
+namespace cisamr::driver {
+namespace {
+
+void tell(const Comm& comm, const Options& options, const std::string& what) {
+  if (options.progress && comm.rank() == 0) options.progress(what);
+}
+
+// Area (2D) or volume (3D) of cell c.
+template <int Dim>
+double cell_measure(const mesh::SimplexMesh<Dim>& m, std::size_t c) {
+  const LocalId* n = m.cell(c);
+  if constexpr (Dim == 2)
+    return mesh::signed_area(m.point(n[0]), m.point(n[1]), m.point(n[2]));
+  else
+    return mesh::signed_volume(m.point(n[0]), m.point(n[1]), m.point(n[2]), m.point(n[3]));
+}
+
+// One process, no partitions: the sequential mesher, its result as the one partition.
+template <int Dim>
+void mesh_sequential(const Comm& comm, const geometry::SceneDesc& scene, MeshRun<Dim>& run) {
+  using Oracle = std::conditional_t<Dim == 2, geometry::Oracle2, geometry::Oracle3>;
+  tell(comm, run.options, "building the geometry oracle");
+  const Oracle oracle(scene);
+  tell(comm, run.options,
+       Dim == 2 ? "meshing (SAMR, r-adaptivity, subdivision)"
+                : "meshing (SAMR, r-adaptivity with the quality guard, face swapping, subdivision)");
+  pipeline::Result<Dim> result = pipeline::mesh(oracle, run.options.pipeline);
+  parallel::DistributedMesh<Dim>& m = run.mesh;
+  m.piece.mesh = std::move(result.mesh);
+  m.piece.node_key = std::move(result.node_identity);
+  m.piece.owned_nodes = m.piece.global_nodes = static_cast<std::int64_t>(m.piece.mesh.node_count());
+  m.global_cells = static_cast<std::int64_t>(m.piece.mesh.cell_count());
+  m.phases = scene.phases;
+  for (int d = 0; d < Dim; ++d) m.domain.min[d] = scene.domain_min[d], m.domain.max[d] = scene.domain_max[d];
+  m.scene_inclusions = static_cast<std::int64_t>(scene.inclusions.size());
+  parallel::PartitionSummary whole;
+  whole.elements = m.global_cells;
+  whole.nodes = m.piece.global_nodes;
+  m.partitions = {whole};
+  m.counters = result.counters;
+  m.times = std::move(result.times);
+}
+
+// Elements and measure per phase (in `phases` order) over every rank's cells.
+template <int Dim>
+std::vector<PhaseFigures> phase_figures(const Comm& comm, const mesh::SimplexMesh<Dim>& piece,
+                                        const std::vector<geometry::Phase>& phases) {
+  std::vector<PhaseFigures> figures(phases.size());
+  for (std::size_t c = 0; c < piece.cell_count(); ++c) {
+    const auto k = std::ranges::find_if(phases, [&](const geometry::Phase& p) { return p.id == piece.cell_phase[c]; });
+    if (k == phases.end()) continue;
+    PhaseFigures& f = figures[static_cast<std::size_t>(k - phases.begin())];
+    ++f.elements;
+    f.measure += cell_measure(piece, c);
+  }
+  for (PhaseFigures& f : figures) f = {comm.allreduce_sum(f.elements), comm.allreduce_sum(f.measure)};
+  return figures;
+}
+
+// Aspect ratios, and with Options::figures per-phase counts and measures and the checksum,
+// all over every rank's cells.
+template <int Dim>
+void take_figures(const Comm& comm, MeshRun<Dim>& run) {
+  const mesh::SimplexMesh<Dim>& piece = run.mesh.piece.mesh;
+  {
+    ScopedPhase timer(&run.mesh.times, "quality");
+    const quality::AspectStats local = quality::aspect_statistics(piece, run.bound);
+    run.aspect = run.distributed ? parallel::merge_aspect_statistics(comm, local) : local;
+    if (run.options.figures) run.phase_figures = phase_figures(comm, piece, run.mesh.phases);
+  }
+  if (run.options.figures) run.checksum = parallel::mesh_checksum(comm, piece);
+}
+
+}  // namespace
+
+bool is_distributed(const Comm& comm, const Options& options) { return comm.size() > 1 || options.partitions > 0; }
+
+std::variant<MeshRun<2>, MeshRun<3>> mesh_scene(const Comm& comm, const std::string& scene_path,
+                                                 const Options& options) {
+  const auto start = std::chrono::steady_clock::now();
+  const bool distributed = is_distributed(comm, options);
+  tell(comm, options, "reading the scene");
+  geometry::SceneDesc scene;
+  if (distributed)  // every rank reads the descriptors; STL triangles later, where needed
+    parallel::run_collectively(comm, [&] {
+      scene = io::read_scene(scene_path, io::ReadSceneOptions{.load_stl = false, .probe_stl = false});
+    });
+  else
+    scene = io::read_scene(scene_path);
+  const double read_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const auto mesh = [&]<int Dim>(MeshRun<Dim> run) -> std::variant<MeshRun<2>, MeshRun<3>> {
+    run.options = options;
+    run.distributed = distributed;
+    run.ranks = comm.size();
+    run.start = start;
+    run.bound = options.bound > 0 ? options.bound : Dim == 2 ? 3.0 : 5.0;
+    if (distributed) {
+      tell(comm, options, "meshing on " + std::to_string(comm.size()) + " rank(s)");
+      parallel::MeshOptions o{.pipeline = options.pipeline,
+                              .partitions = options.partitions > 0 ? options.partitions : comm.size(),
+                              .partitioning = {},
+                              .ghost = options.ghost};
+      run.mesh = parallel::mesh_distributed<Dim>(comm, std::move(scene), o);
+      run.mesh.times.add("read", read_seconds);
+      const std::int64_t files = run.mesh.stl_files_read;
+      run.stl_files_read = {-comm.allreduce_max(-files), comm.allreduce_max(files), comm.allreduce_sum(files)};
+    } else {
+      mesh_sequential<Dim>(comm, scene, run);
+    }
+    take_figures(comm, run);
+    return run;
+  };
+  if (scene.dimension == 3) return mesh(MeshRun<3>{});
+  return mesh(MeshRun<2>{});
+}
+
+Output plan_output(const Comm& comm, const std::string& requested, bool gather, bool distributed) {
+  namespace fs = std::filesystem;
+  const std::string extension = fs::path(requested).extension().string();
+  Output out;
+  out.pieces = distributed && (extension == ".pvtu" || (extension == ".vtu" && comm.size() > 1 && !gather));
+  out.path = out.pieces ? fs::path(requested).replace_extension(".pvtu").string() : requested;
+  parallel::run_collectively(comm, [&] {
+    if (out.pieces && gather)
+      throw InputError(requested, "", "--gather writes one file: use .vtu, .msh, .inp or .mesh");
+    if (!out.pieces) io::mesh_format_of(out.path);
+    if (!out.pieces && comm.size() > 1 && !gather)
+      throw InputError(requested, "", "a parallel run writes .pvtu pieces; add --gather to write one " + extension +
+                                          " file on rank 0");
+  });
+  if (out.pieces)
+    for (int r = 0; r < comm.size(); ++r) out.piece_paths.push_back(parallel::piece_path(out.path, r));
+  return out;
+}
+
+template <int Dim>
+void write_outputs(const Comm& comm, MeshRun<Dim>& run, const Output& output, const std::string& svg) {
+  tell(comm, run.options, "writing the mesh");
+  ScopedPhase timer(&run.mesh.times, "write");
+  const parallel::NumberedPiece<Dim>& piece = run.mesh.piece;
+  const bool picture = Dim == 2 && !svg.empty();
+  // On one rank the piece is the whole mesh (nodes in global-id order).
+  mesh::SimplexMesh<Dim> gathered_copy;
+  if ((!output.pieces || picture) && comm.size() > 1) gathered_copy = parallel::gather_mesh<Dim>(comm, piece);
+  const mesh::SimplexMesh<Dim>& gathered = comm.size() > 1 ? gathered_copy : piece.mesh;
+  if (output.pieces)
+    parallel::write_pvtu<Dim>(comm, output.path, piece.mesh);
+  else
+    parallel::write_gathered<Dim>(comm, output.path, gathered, run.mesh.phases);
+  if constexpr (Dim == 2)
+    if (picture)
+      parallel::run_collectively(comm, [&] {
+        if (comm.rank() != 0) return;
+        geometry::SceneDesc header;  // what the picture needs: phases and domain
+        header.phases = run.mesh.phases;
+        header.domain_min = {run.mesh.domain.min[0], run.mesh.domain.min[1], 0};
+        header.domain_max = {run.mesh.domain.max[0], run.mesh.domain.max[1], 0};
+        io::write_mesh_svg(svg, gathered, header);
+      });
+}
+
+template <int Dim>
+void finish(const Comm& comm, MeshRun<Dim>& run) {
+  run.mesh.times.add("total", std::chrono::duration<double>(std::chrono::steady_clock::now() - run.start).count());
+  // A distributed run reports every phase (the same list on every rank); a sequential one
+  // the phases it ran.
+  static const std::vector<std::string> kPhases = {"read",      "partition", "ghost",  "oracle",
+                                                   "samr",      "radapt",    "faceswap", "subdivide",
+                                                   "assemble",  "merge",     "quality", "write",
+                                                   "total"};
+  std::vector<std::string> names;
+  for (const std::string& name : kPhases)
+    if (run.distributed || std::ranges::any_of(run.mesh.times.phases(), [&](const auto& p) { return p.first == name; }))
+      names.push_back(name);
+  run.timings = parallel::spread_over_ranks(comm, run.mesh.times, names);
+  run.total_seconds = run.timings.back().max;
+}
+
+template void write_outputs<2>(const Comm&, MeshRun<2>&, const Output&, const std::string&);
+template void write_outputs<3>(const Comm&, MeshRun<3>&, const Output&, const std::string&);
+template void finish<2>(const Comm&, MeshRun<2>&);
+template void finish<3>(const Comm&, MeshRun<3>&);
+
+}  // namespace cisamr::driver

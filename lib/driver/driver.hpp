@@ -1,0 +1,96 @@
+#pragma once
+// One call that meshes a scene file, sequentially or distributed, and what the run reports
+// (README.md). On one process without partitions it is the plain sequential mesher
+// (pipeline::mesh); with partitions, or on several ranks, the parallel mesher
+// (parallel::mesh_distributed). Every function taking a Comm is collective.
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <variant>
+#include <vector>
+
+#include "core/comm.hpp"
+#include "parallel/distributed.hpp"
+#include "parallel/output.hpp"
+#include "quality/quality.hpp"
+
+namespace cisamr::driver {
+
+struct Options {
+  pipeline::Options pipeline;
+  // 0: the sequential mesher on one process, one partition per rank on several; N: the
+  // parallel mesher over N partitions (N ≥ ranks).
+  int partitions = 0;
+  parallel::GhostRule ghost;
+  double bound = 0;     // aspect-ratio bound of the statistics (0: 3 in 2D, 5 in 3D)
+  bool figures = true;  // per-phase counts and measures, checksum (a pass and a sort over the cells)
+  std::function<void(const std::string&)> progress;  // told on rank 0 when a stage begins
+};
+
+// Whether `options` ask for the parallel mesher on `comm`.
+bool is_distributed(const Comm& comm, const Options& options);
+
+struct PhaseFigures {
+  std::int64_t elements = 0;
+  double measure = 0;  // area in 2D, volume in 3D
+};
+
+struct RankSpread {
+  std::int64_t min = 0, max = 0, total = 0;
+};
+
+template <int Dim>
+struct MeshRun {
+  static constexpr int dim = Dim;
+  Options options;
+  bool distributed = false;
+  int ranks = 1;
+  // piece.mesh: the whole mesh (sequential) or this rank's piece (global node ids);
+  // counters over every partition of every rank; every partition with its box, load and
+  // ghost (sequential: one); this rank's phase times.
+  parallel::DistributedMesh<Dim> mesh;
+  double bound = 0;
+  quality::AspectStats aspect;              // of the whole mesh
+  std::vector<PhaseFigures> phase_figures;  // per scene phase (Options::figures)
+  std::uint64_t checksum = 0;               // order-free, of the whole mesh (Options::figures)
+  RankSpread stl_files_read;                // STL files read per rank (distributed)
+  std::chrono::steady_clock::time_point start;
+  std::vector<parallel::PhaseSpread> timings;  // per phase, over ranks (finish)
+  double total_seconds = 0;                    // slowest rank (finish)
+};
+
+// Reads the scene (every rank parses it; STL files as lib/parallel's README says), meshes
+// it, and takes the aspect-ratio statistics, and with Options::figures the per-phase
+// figures and the checksum. Errors are thrown on every rank alike.
+std::variant<MeshRun<2>, MeshRun<3>> mesh_scene(const Comm& comm, const std::string& scene_path,
+                                                 const Options& options);
+
+// Where the mesh goes: one file (on rank 0 when distributed), or a .pvtu listing one .vtu
+// piece per rank (a .pvtu name, or .vtu on several ranks without `gather`).
+struct Output {
+  std::string path;
+  bool pieces = false;
+  std::vector<std::string> piece_paths;
+};
+
+// Checks the requested output before any work (format; pieces or one gathered file).
+// Throws InputError on every rank.
+Output plan_output(const Comm& comm, const std::string& requested, bool gather, bool distributed);
+
+// Writes the mesh where `output` says and, in 2D with `svg` given, a picture of it (timed
+// as "write").
+template <int Dim>
+void write_outputs(const Comm& comm, MeshRun<Dim>& run, const Output& output, const std::string& svg);
+
+// Ends the run's clock: "total" added to this rank's times, every phase's spread over ranks.
+template <int Dim>
+void finish(const Comm& comm, MeshRun<Dim>& run);
+
+// The cisamr-report/1 JSON document of a finished run (indented, ending with a newline),
+// in the same wording sequential and distributed (the distributed run's keys added).
+// Complete on rank 0.
+template <int Dim>
+std::string report(const MeshRun<Dim>& run, const std::string& scene_path, const Output& output);
+
+}  // namespace cisamr::driver

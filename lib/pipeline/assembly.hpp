@@ -1,0 +1,37 @@
+#pragma once
+// Inside the pipeline module: what both dimensions' kernels share around their stages.
+#include <cstdint>
+#include <vector>
+
+#include "core/types.hpp"
+#include "geometry/scene.hpp"
+#include "grid/lattice.hpp"
+#include "pipeline/pipeline.hpp"
+
+namespace cisamr::pipeline {
+
+// The coarse cells a kernel builds its forest on: `box` grown by `ghost` cells on each
+// side, clipped to the domain.
+template <int Dim>
+grid::CellRange<Dim> ghosted_range(const grid::Lattice<Dim>& lattice, const grid::CellRange<Dim>& box, int ghost);
+
+// What the mesh is made of once the stages are done (their working state released): the
+// lattice nodes, the points subdivision added (node ids follow the lattice nodes'), and
+// the cells over both.
+template <int Dim>
+struct MeshParts {
+  std::vector<std::uint64_t> lattice_key;  // per lattice node
+  std::vector<Vec<Dim>> lattice_position;  // per lattice node, after snapping
+  std::vector<Vec<Dim>> extra_points;
+  std::vector<NodeIdentity<Dim>> extra_identity;  // per extra point; empty: none is shared
+  std::vector<std::int32_t> cells;  // Dim+1 node ids per cell, positively oriented
+  std::vector<std::int32_t> phase;  // phase index (into scene.phases) per cell
+};
+
+// The mesh: cells of void phases dropped, nodes renumbered in order of first use and unused
+// ones removed, node identities kept. The parts' cell arrays become the mesh's (compacted
+// in place: no second copy of the connectivity).
+template <int Dim>
+void assemble(const geometry::SceneDesc& scene, MeshParts<Dim>&& parts, int partition_id, Result<Dim>& result);
+
+}  // namespace cisamr::pipeline

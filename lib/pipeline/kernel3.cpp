@@ -1,0 +1,86 @@
+// The 3D kernel: SAMR → r-adaptivity with the quality guard → face swapping →
+// subdivision, then the shared assembly.
+#include "faceswap/faceswap3.hpp"
+#include "pipeline/assembly.hpp"
+#include "radapt/radapt3.hpp"
+#include "samr/samr3.hpp"
+#include "subdivide/subdivide3.hpp"
+
+namespace cisamr::pipeline {
+namespace {
+
+// Runs the stages and returns what the mesh is made of. Their working state (the forest,
+// the snapping state, the swaps) is released on return, before the mesh is built, so that
+// it does not add to the peak (validation/paper3/README.md, memory).
+MeshParts<3> run_stages(const geometry::Oracle3& oracle, const grid::Lattice3& lattice, const grid::CellRange<3>& box,
+                        int ghost, const Options& options, std::span<const int> levels, Result<3>& result) {
+  Counters<3>& counters = result.counters;
+  const grid::CellRange<3> range = ghosted_range(lattice, box, ghost);
+  samr::RefinedGrid3 grid = [&] {
+    ScopedPhase timer(&result.times, "samr");
+    return samr::refine3(oracle, lattice, range, levels);
+  }();
+  counters.coarse_cells = range.count(0) * range.count(1) * range.count(2);
+  counters.refinements = grid.refinements;
+  counters.samr_sweeps = grid.sweeps;
+  for (std::int32_t t = 0; t < static_cast<std::int32_t>(grid.forest.size()); ++t)
+    counters.leaves += grid.forest.is_leaf(t) ? 1 : 0;
+
+  radapt::Nodes3 nodes = [&] {
+    ScopedPhase timer(&result.times, "radapt");
+    return radapt::snap3(oracle, grid,
+                         radapt::Options3{.alpha = options.alpha, .alpha_diagonal = options.alpha_diagonal3,
+                                          .max_candidates = options.max_candidates3,
+                                          .bound = options.bound3});
+  }();
+  counters.lattice_nodes = static_cast<std::int64_t>(nodes.key.size());
+  counters.snapped_nodes = nodes.snapped_count;
+  counters.refused_nodes = nodes.refused_count;
+  counters.collapsed_nodes = nodes.collapsed_count;
+  counters.collapsed_cut_points = nodes.collapsed_cut_points;
+  counters.max_collapse_deviation = nodes.max_collapse_deviation;
+  counters.guarded_leaves = nodes.guarded_leaves;
+  counters.guard_combinations = nodes.combinations;
+  counters.missing_crossings = nodes.missing_crossings;
+
+  const faceswap::Swaps3 swaps = [&] {
+    ScopedPhase timer(&result.times, "faceswap");
+    return faceswap::swap3(oracle, grid, nodes, faceswap::Options3{.trigger = options.swap_trigger3});
+  }();
+  counters.face_swaps = swaps.swaps;
+
+  subdivide::Tets3 tets = [&] {
+    ScopedPhase timer(&result.times, "subdivide");
+    return subdivide::subdivide3(oracle, grid, nodes, box, &swaps);
+  }();
+  counters.cut_tets = tets.cut_tets;
+  counters.cut_nodes = tets.cut_nodes;
+  counters.closed_tets = tets.closed_tets;
+  counters.steiner_points = tets.steiner_points;
+  counters.unresolved = tets.unresolved;
+  counters.inverted = tets.inverted;
+  counters.max_level = lattice.max_level;
+  counters.worst_closure = tets.worst_closure;
+  counters.worst_kept = tets.worst_kept;
+  counters.worst_split = tets.worst_split;
+  counters.worst_swapped = tets.worst_swapped;
+  counters.kept_above_5 = tets.kept_above_5;
+  counters.split_above_5 = tets.split_above_5;
+  return {std::move(nodes.key),  std::move(nodes.position), std::move(tets.extra_points),
+          std::move(tets.extra_identity), std::move(tets.tets), std::move(tets.phase)};
+}
+
+}  // namespace
+
+Result<3> run(const geometry::Oracle3& oracle, const grid::Lattice3& lattice, const grid::CellRange<3>& box,
+              int ghost, const Options& options, int partition_id, std::span<const int> levels) {
+  Result<3> result;
+  MeshParts<3> parts = run_stages(oracle, lattice, box, ghost, options, levels, result);
+  {
+    ScopedPhase timer(&result.times, "assemble");
+    assemble(oracle.scene(), std::move(parts), partition_id, result);
+  }
+  return result;
+}
+
+}  // namespace cisamr::pipeline
