@@ -445,7 +445,7 @@ void write_vtu(const std::string& path, const mesh::SimplexMesh<Dim>& m,
 template <int Dim>
 void write_mesh(const std::string& path, const mesh::SimplexMesh<Dim>& m,
                 const std::vector<geometry::Phase>& phases, const MeshWriteOptions& options) {
-  const MeshFormat format = mesh_format_of(path);
+  const MeshFormat format = options.format ? *options.format : mesh_format_of(path);
   check_mesh(m);
   AtomicFile file(path);
   switch (format) {
