@@ -419,6 +419,7 @@ void write_medit_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m) {
 
 MeshFormat mesh_format_of(const std::string& path) {
   if (path.empty()) throw InputError("\"\"", "", "cannot write: the output path is empty");
+  if (path == "-") throw InputError(path, "", "standard output has no file extension: name the mesh format");
   std::string extension = std::filesystem::path(path).extension().string();
   std::string lower = extension;
   std::transform(lower.begin(), lower.end(), lower.begin(),

@@ -40,6 +40,12 @@ is_json "$dir/report.out" || { head -c 300 "$dir/report.out"; fail "mesh --repor
 grep -q 'max aspect ratio' "$dir/report.err" || fail "mesh --report -: the summary is not on standard error"
 [ ! -e "$dir/-" ] || fail "mesh --report -: a file named '-' was written"
 
+"$cisamr" mesh "$composite" -o - --format msh > "$dir/mesh.out" 2> "$dir/mesh.err" || fail "mesh -o - --format msh"
+head -1 "$dir/mesh.out" | grep -qx '\$MeshFormat' || fail "mesh -o -: standard output does not start with \$MeshFormat"
+grep -q 'max aspect ratio' "$dir/mesh.err" || fail "mesh -o -: the summary is not on standard error"
+"$cisamr" mesh "$composite" -o - 2> "$dir/mesh.err" > /dev/null
+[ $? -eq 2 ] && grep -q 'name the mesh format' "$dir/mesh.err" || fail "mesh -o - without a format: not a clear error"
+
 "$cisamr" certify "$dir/c.vtu" "${passing[@]}" --json - > "$dir/cert.out" 2> "$dir/cert.err" \
   || fail "certify --json -"
 is_json "$dir/cert.out" || { head -c 300 "$dir/cert.out"; fail "certify --json -: standard output is not JSON"; }
