@@ -1,7 +1,8 @@
 // cisamr pack SPEC -o SCENE [--seed S]
 // Packs the particle populations of a cisamr-pack/1 spec (lib/pack/README.md) and writes the
 // scene. Prints the achieved volume fractions and size statistics. Unreachable targets and
-// bad spec fields are input errors (exit 2).
+// bad spec fields are input errors (exit 2). With `-o -` the scene goes to standard output and
+// the summary to standard error.
 #include <cstdio>
 #include <memory>
 #include <string>
@@ -9,6 +10,7 @@
 #include "commands.hpp"
 #include "core/error.hpp"
 #include "core/timer.hpp"
+#include "io/atomic_file.hpp"
 #include "io/scene_io.hpp"
 #include "pack/pack.hpp"
 
@@ -47,31 +49,32 @@ void add_pack_command(CLI::App& app, GlobalFlags& flags, int& exit_code) {
       io::write_scene(args->output, result.scene);
     }
     const pack::PackReport& r = result.report;
+    FILE* summary = io::is_standard_output(args->output) ? stderr : stdout;
     if (!flags.quiet) {
-      std::printf("packed %zu inclusions (%dD, seed %llu) in %.2f s -> %s\n", result.scene.inclusions.size(),
-                  spec.dimension, static_cast<unsigned long long>(spec.seed), r.seconds, args->output.c_str());
-      std::printf("  %-16s %9s %9s %9s %10s %10s %10s %10s %10s %8s\n", "population", "placed", "target", "fraction",
-                  "size min", "size mean", "size max", "size std", "trials", "failed");
+      std::fprintf(summary, "packed %zu inclusions (%dD, seed %llu) in %.2f s -> %s\n", result.scene.inclusions.size(),
+                   spec.dimension, static_cast<unsigned long long>(spec.seed), r.seconds, args->output.c_str());
+      std::fprintf(summary, "  %-16s %9s %9s %9s %10s %10s %10s %10s %10s %8s\n", "population", "placed", "target", "fraction",
+                   "size min", "size mean", "size max", "size std", "trials", "failed");
       for (std::size_t i = 0; i < r.populations.size(); ++i) {
         const auto& p = r.populations[i];
         const auto& s = spec.populations[i];
         char target[32] = "-";
         if (s.volume_fraction) std::snprintf(target, sizeof target, "%.4f", *s.volume_fraction);
-        std::printf("  %-16s %9lld %9s %8.4f%s %10.4g %10.4g %10.4g %10.4g %10lld %8lld\n", p.name.c_str(),
-                    static_cast<long long>(p.placed), target, p.achieved_fraction, p.fraction_is_estimate ? "~" : " ",
-                    p.size_min, p.size_mean, p.size_max, p.size_std, static_cast<long long>(p.trials),
-                    static_cast<long long>(p.failures));
-        if (p.size_scale != 1) std::printf("  %-16s sizes scaled by %.6g to meet both count and volume fraction\n", "", p.size_scale);
+        std::fprintf(summary, "  %-16s %9lld %9s %8.4f%s %10.4g %10.4g %10.4g %10.4g %10lld %8lld\n", p.name.c_str(),
+                     static_cast<long long>(p.placed), target, p.achieved_fraction, p.fraction_is_estimate ? "~" : " ",
+                     p.size_min, p.size_mean, p.size_max, p.size_std, static_cast<long long>(p.trials),
+                     static_cast<long long>(p.failures));
+        if (p.size_scale != 1) std::fprintf(summary, "  %-16s sizes scaled by %.6g to meet both count and volume fraction\n", "", p.size_scale);
       }
-      std::printf("  total volume fraction %.4f%s; %lld exact checks, %lld pairs cleared by secondary boxes\n",
-                  r.total_fraction, "", static_cast<long long>(r.exact_checks),
-                  static_cast<long long>(r.secondary_rejections));
+      std::fprintf(summary, "  total volume fraction %.4f%s; %lld exact checks, %lld pairs cleared by secondary boxes\n",
+                   r.total_fraction, "", static_cast<long long>(r.exact_checks),
+                   static_cast<long long>(r.secondary_rejections));
       bool estimate = false;
       for (const auto& p : r.populations) estimate = estimate || p.fraction_is_estimate;
-      if (estimate) std::printf("  ~ union of overlapping particles, estimated on a raster\n");
+      if (estimate) std::fprintf(summary, "  ~ union of overlapping particles, estimated on a raster\n");
     }
     if (flags.verbose)
-      for (const auto& [name, seconds] : times.phases()) std::printf("  %-10s %8.3f s\n", name.c_str(), seconds);
+      for (const auto& [name, seconds] : times.phases()) std::fprintf(summary, "  %-10s %8.3f s\n", name.c_str(), seconds);
     exit_code = 0;
   });
 }

@@ -1,5 +1,7 @@
 // cisamr partition SCENE -n N -o PARTS.json [--svg PARTS.svg] [--compare-uniform]
 // Algorithm 1: load-balanced boxes on the background lattice (lib/partition/README.md).
+// Both outputs appear together or not at all (io::OutputSet). `-` for either writes it to
+// standard output, and the summary then goes to standard error.
 #include <chrono>
 #include <cstdio>
 #include <memory>
@@ -30,9 +32,9 @@ void write_text(const std::string& path, const std::string& text) {
   file.commit();
 }
 
-void print_row(const char* name, const partition::Partition& p, double seconds) {
-  std::printf("  %-14s %6zu %12.6g %12.6g %9.4f %14.6g %9.3f\n", name, p.parts.size(), p.max_load(), p.mean_load(),
-              p.imbalance(), p.shared_face_measure(), seconds);
+void print_row(FILE* out, const char* name, const partition::Partition& p, double seconds) {
+  std::fprintf(out, "  %-14s %6zu %12.6g %12.6g %9.4f %14.6g %9.3f\n", name, p.parts.size(), p.max_load(), p.mean_load(),
+               p.imbalance(), p.shared_face_measure(), seconds);
 }
 
 }  // namespace
@@ -73,22 +75,25 @@ void add_partition_command(CLI::App& app, GlobalFlags& flags, int& exit_code) {
     const double ours_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     {
       ScopedPhase timer(&times, "write");
+      io::OutputSet outputs;
       write_text(args->output, partition::to_json(p, args->scene));
       if (!args->svg.empty()) write_text(args->svg, partition::to_svg(p, scene));
+      outputs.commit();
     }
+    FILE* summary = io::is_standard_output(args->output) || io::is_standard_output(args->svg) ? stderr : stdout;
     if (!flags.quiet) {
-      std::printf("partitioned %s into %zu boxes -> %s\n", args->scene.c_str(), p.parts.size(), args->output.c_str());
-      std::printf("  %-14s %6s %12s %12s %9s %14s %9s\n", "method", "parts", "max load", "mean load", "max/mean",
-                  "shared faces", "time [s]");
-      print_row(p.method.c_str(), p, ours_s);
+      std::fprintf(summary, "partitioned %s into %zu boxes -> %s\n", args->scene.c_str(), p.parts.size(), args->output.c_str());
+      std::fprintf(summary, "  %-14s %6s %12s %12s %9s %14s %9s\n", "method", "parts", "max load", "mean load", "max/mean",
+                   "shared faces", "time [s]");
+      print_row(summary, p.method.c_str(), p, ours_s);
       if (args->compare_uniform) {
         const auto t1 = std::chrono::steady_clock::now();
         const partition::Partition u = partition::uniform_grid_partition(scene, args->n, options);
-        print_row("uniform grid", u, std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count());
+        print_row(summary, "uniform grid", u, std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count());
       }
     }
     if (flags.verbose)
-      for (const auto& [name, seconds] : times.phases()) std::printf("  %-10s %8.3f s\n", name.c_str(), seconds);
+      for (const auto& [name, seconds] : times.phases()) std::fprintf(summary, "  %-10s %8.3f s\n", name.c_str(), seconds);
     exit_code = 0;
   });
 }

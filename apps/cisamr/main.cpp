@@ -9,6 +9,7 @@
 
 #include "commands.hpp"
 #include "core/error.hpp"
+#include "io/atomic_file.hpp"
 #include "parallel/collective.hpp"
 #include "parallel/session.hpp"
 
@@ -31,6 +32,9 @@ int main(int argc, char** argv) {
   // MPI starts only when mpiexec launched us; a plain run never touches it.
   parallel::MpiSession session(argc, argv);
   const Comm& comm = session.comm();
+  // A run stopped by SIGINT/SIGTERM (under mpiexec: every rank gets it) leaves no
+  // half-written temporary beside its outputs.
+  io::install_signal_cleanup();
   const bool root = comm.rank() == 0;
   NullBuffer null_buffer;
   std::ostream null_stream(&null_buffer);

@@ -12,6 +12,7 @@
 // Numbers in ASCII formats are printed with the shortest text that reads back to the same
 // double, so every format round-trips coordinates bit for bit.
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -29,9 +30,11 @@ MeshFormat mesh_format_of(const std::string& path);
 struct MeshWriteOptions {
   // Per-cell aspect ratio for the VTU "aspect_ratio" array; computed when empty.
   std::vector<double> cell_aspect_ratio;
+  // The format when the path's extension does not name it: "-" (standard output).
+  std::optional<MeshFormat> format;
 };
 
-// Writes `m` in the format of `path`'s extension. `phases` gives the names (msh physical
+// Writes `m` in the format of `path`'s extension (or options.format). `phases` gives the names (msh physical
 // names, inp ELSET names); a phase id used by a cell but missing there is named
 // "phase<id>". Empty cell_partition / node_global_id are written as 0 / the node index.
 // Throws InputError for an unknown extension or an unwritable path; the destination is

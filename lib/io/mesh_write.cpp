@@ -418,6 +418,8 @@ void write_medit_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m) {
 }  // namespace
 
 MeshFormat mesh_format_of(const std::string& path) {
+  if (path.empty()) throw InputError("\"\"", "", "cannot write: the output path is empty");
+  if (path == "-") throw InputError(path, "", "standard output has no file extension: name the mesh format");
   std::string extension = std::filesystem::path(path).extension().string();
   std::string lower = extension;
   std::transform(lower.begin(), lower.end(), lower.begin(),
@@ -444,7 +446,7 @@ void write_vtu(const std::string& path, const mesh::SimplexMesh<Dim>& m,
 template <int Dim>
 void write_mesh(const std::string& path, const mesh::SimplexMesh<Dim>& m,
                 const std::vector<geometry::Phase>& phases, const MeshWriteOptions& options) {
-  const MeshFormat format = mesh_format_of(path);
+  const MeshFormat format = options.format ? *options.format : mesh_format_of(path);
   check_mesh(m);
   AtomicFile file(path);
   switch (format) {

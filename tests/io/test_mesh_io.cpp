@@ -199,6 +199,15 @@ TEST(MeshIo, VtuAspectRatioIsComputedOrTaken) {
   EXPECT_FALSE(std::filesystem::exists(dir.file("c.vtu")));
 }
 
+TEST(MeshIo, FormatOptionOverridesTheExtension) {
+  TempDir dir;
+  MeshWriteOptions options;
+  options.format = MeshFormat::msh;  // what "-" (standard output) needs: it has no extension
+  write_mesh(dir.file("m.vtu"), grid_mesh2(1, 1), kPhases, options);
+  EXPECT_EQ(read_text(dir.file("m.vtu")).rfind("$MeshFormat\n", 0), 0u);
+  EXPECT_THROW(write_mesh(dir.file("m.txt"), grid_mesh2(1, 1), kPhases), InputError);
+}
+
 TEST(MeshIo, MshDeclaresOnePhysicalGroupPerPhase) {
   TempDir dir;
   write_mesh(dir.file("m.msh"), grid_mesh2(3, 3), kPhases);
