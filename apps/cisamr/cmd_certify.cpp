@@ -4,15 +4,13 @@
 #include <cstdio>
 #include <exception>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "commands.hpp"
 #include "core/error.hpp"
 #include "core/timer.hpp"
-#include "geometry/oracle2.hpp"
-#include "geometry/oracle3.hpp"
 #include "geometry/scene.hpp"
-#include "io/atomic_file.hpp"
 #include "io/mesh_io.hpp"
 #include "io/scene_io.hpp"
 #include "quality/certificate.hpp"
@@ -30,10 +28,26 @@ void progress(const GlobalFlags& flags, const char* what) {
   if (show_progress(flags)) std::fprintf(stderr, "cisamr: %s\n", what);
 }
 
-void write_text(const std::string& path, const std::string& text) {
-  io::AtomicFile file(path);
-  file.write(text);
-  file.commit();
+// Without a scene (nullptr) the domain is the mesh's bounding box and fidelity is not checked.
+template <int Dim>
+quality::Certificate certify_mesh(const mesh::SimplexMesh<Dim>& mesh, const geometry::SceneDesc* scene,
+                                  const quality::CertifyOptions& options, const GlobalFlags& flags,
+                                  PhaseTimes& times) {
+  if (!scene) {
+    ScopedPhase timer(&times, "certify");
+    progress(flags, "checking the mesh (domain = its bounding box)");
+    quality::Certificate c = quality::certify<Dim>(mesh, quality::bounding_box(mesh), options);
+    c.notes.push_back("no scene: the domain is the mesh's bounding box and phase fidelity is not checked");
+    return c;
+  }
+  progress(flags, "building the geometry oracle");
+  const quality::OracleOf<Dim> oracle = [&] {
+    ScopedPhase timer(&times, "oracle");
+    return quality::OracleOf<Dim>(*scene);
+  }();
+  ScopedPhase timer(&times, "certify");
+  progress(flags, "checking the mesh against the scene");
+  return quality::certify<Dim>(mesh, oracle, options);
 }
 
 quality::Certificate certify_loaded(const CertifyArgs& args, const io::LoadedMesh& loaded,
@@ -41,46 +55,21 @@ quality::Certificate certify_loaded(const CertifyArgs& args, const io::LoadedMes
   quality::CertifyOptions options;
   options.bound = args.bound;
   options.fidelity_tolerance = args.fidelity_tolerance;
-  if (args.scene.empty()) {
-    ScopedPhase timer(&times, "certify");
-    progress(flags, "checking the mesh (domain = its bounding box)");
-    quality::Certificate c =
-        loaded.dimension == 2
-            ? quality::certify<2>(loaded.mesh2, quality::bounding_box(loaded.mesh2), options)
-            : quality::certify<3>(loaded.mesh3, quality::bounding_box(loaded.mesh3), options);
-    c.notes.push_back("no scene: the domain is the mesh's bounding box and phase fidelity is not checked");
-    return c;
-  }
-
-  progress(flags, "reading the scene");
-  geometry::SceneDesc scene;
-  {
-    ScopedPhase timer(&times, "read scene");
-    scene = io::read_scene(args.scene);
-  }
-  if (scene.dimension != loaded.dimension)
-    throw InputError(args.scene, "dimension",
-                     "the scene is " + std::to_string(scene.dimension) + "D but the mesh " + args.mesh + " is " +
-                         std::to_string(loaded.dimension) + "D");
-  progress(flags, "building the geometry oracle");
-  if (loaded.dimension == 3) {
-    std::unique_ptr<geometry::Oracle3> oracle;
+  std::optional<geometry::SceneDesc> scene;
+  if (!args.scene.empty()) {
+    progress(flags, "reading the scene");
     {
-      ScopedPhase timer(&times, "oracle");
-      oracle = std::make_unique<geometry::Oracle3>(scene);
+      ScopedPhase timer(&times, "read scene");
+      scene = io::read_scene(args.scene);
     }
-    ScopedPhase timer(&times, "certify");
-    progress(flags, "checking the mesh against the scene");
-    return quality::certify(loaded.mesh3, *oracle, options);
+    if (scene->dimension != loaded.dimension)
+      throw InputError(args.scene, "dimension",
+                       "the scene is " + std::to_string(scene->dimension) + "D but the mesh " + args.mesh + " is " +
+                           std::to_string(loaded.dimension) + "D");
   }
-  std::unique_ptr<geometry::Oracle2> oracle;
-  {
-    ScopedPhase timer(&times, "oracle");
-    oracle = std::make_unique<geometry::Oracle2>(scene);
-  }
-  ScopedPhase timer(&times, "certify");
-  progress(flags, "checking the mesh against the scene");
-  return quality::certify(loaded.mesh2, *oracle, options);
+  const geometry::SceneDesc* scene_or_none = scene ? &*scene : nullptr;
+  return loaded.dimension == 2 ? certify_mesh<2>(loaded.mesh2, scene_or_none, options, flags, times)
+                               : certify_mesh<3>(loaded.mesh3, scene_or_none, options, flags, times);
 }
 
 }  // namespace
@@ -123,8 +112,8 @@ void add_certify_command(CLI::App& app, GlobalFlags& flags, int& exit_code) {
       for (const geometry::Phase& p : loaded.phases) c.phase_names.emplace_back(p.id, p.name);
     {
       ScopedPhase timer(&times, "write");
-      if (!args->json.empty()) write_text(args->json, quality::certificate_json(c));
-      if (!args->html.empty()) write_text(args->html, quality::certificate_html(c));
+      if (!args->json.empty()) write_text_file(args->json, quality::certificate_json(c));
+      if (!args->html.empty()) write_text_file(args->html, quality::certificate_html(c));
     }
     if (!flags.quiet) std::fputs(quality::certificate_summary(c).c_str(), stdout);
     if (flags.verbose)

@@ -8,7 +8,6 @@
 
 #include "commands.hpp"
 #include "core/error.hpp"
-#include "io/atomic_file.hpp"
 #include "io/scene_io.hpp"
 #include "tetgen_ref/compare3.hpp"
 
@@ -24,12 +23,6 @@ struct CompareArgs {
   bool in_process = false;
   bool no_conformity = false;
 };
-
-void write_text(const std::string& path, const std::string& text) {
-  io::AtomicFile file(path);
-  file.write(text);
-  file.commit();
-}
 
 }  // namespace
 
@@ -66,8 +59,8 @@ void add_compare_command(CLI::App& app, GlobalFlags& flags, int& exit_code) {
     if (show_progress(flags))
       options.progress = [](const std::string& what) { std::fprintf(stderr, "cisamr: %s\n", what.c_str()); };
     const tetgen_ref::Comparison c = tetgen_ref::compare3(scene, options);
-    if (!args->json.empty()) write_text(args->json, tetgen_ref::comparison_json(c));
-    if (!args->html.empty()) write_text(args->html, tetgen_ref::comparison_html(c));
+    if (!args->json.empty()) write_text_file(args->json, tetgen_ref::comparison_json(c));
+    if (!args->html.empty()) write_text_file(args->html, tetgen_ref::comparison_html(c));
     if (!flags.quiet) std::fputs(tetgen_ref::comparison_table(c).c_str(), stdout);
     exit_code = 0;
   });

@@ -3,6 +3,10 @@
 // The callback stores the process exit code in `exit_code`; errors are thrown
 // (InputError → exit 2, anything else → exit 1) and printed once by main().
 #include <CLI/CLI.hpp>
+#include <string>
+#include <string_view>
+
+#include "io/atomic_file.hpp"
 
 namespace cisamr::app {
 
@@ -19,5 +23,12 @@ void add_compare_command(CLI::App& app, GlobalFlags& flags, int& exit_code);  //
 
 // Progress lines go to stderr only when it is a terminal and --quiet is not given.
 bool show_progress(const GlobalFlags& flags);
+
+// Writes a report file whole (io::AtomicFile: it appears complete or not at all).
+inline void write_text_file(const std::string& path, std::string_view text) {
+  io::AtomicFile file(path);
+  file.write(text);
+  file.commit();
+}
 
 }  // namespace cisamr::app

@@ -39,6 +39,36 @@ std::string html_escape(const std::string& s) {
 // Non-finite numbers become null (JSON has no inf/NaN).
 Json number(double v) { return std::isfinite(v) ? Json(v) : Json(nullptr); }
 
+// What differs between the renderings of a 2D and a 3D certificate.
+struct DimensionWords {
+  int coordinates;  // per point shown
+  const char* cells;
+  const char* regular_cell;    // the cell of aspect ratio 1
+  const char* aspect_formula;  // Verdict's definition, plain text
+  const char* aspect_formula_html;
+  const char* angle_key;  // JSON: min_<key>_deg, max_<key>_deg
+  const char* angle;      // the angles reported
+};
+
+// A certificate of dimension other than 3 is rendered as 2D.
+const DimensionWords& words(int dimension) {
+  static const DimensionWords two{2, "triangles", "equilateral triangle", "l_max / (2 sqrt(3) r_in)",
+                                  "l_max / (2&#8730;3 r_in)", "angle", "angle"};
+  static const DimensionWords three{3, "tetrahedra", "regular tetrahedron", "l_max / (2 sqrt(6) r_in)",
+                                    "l_max / (2&#8730;6 r_in)", "dihedral", "dihedral angle"};
+  return dimension == 3 ? three : two;
+}
+
+// Appends an item to a comma-separated list.
+void add_item(std::string& list, const std::string& item) { list += (list.empty() ? "" : ", ") + item; }
+
+void examples_html(std::ostringstream& o, const std::vector<std::string>& examples) {
+  if (examples.empty()) return;
+  o << "<ul>\n";
+  for (const auto& e : examples) o << "<li class=\"ex\">" << html_escape(e) << "</li>\n";
+  o << "</ul>\n";
+}
+
 std::string phase_label(const Certificate& c, int id) {
   for (const auto& [pid, name] : c.phase_names)
     if (pid == id && !name.empty()) return std::to_string(id) + " (" + name + ")";
@@ -69,15 +99,14 @@ std::vector<Counter> conformity_counters(const ConformityReport& r) {
   };
 }
 
-// The centroid check exists in 3D only.
-std::vector<Counter> fidelity_counters(const FidelityReport& f, int dimension) {
+std::vector<Counter> fidelity_counters(const FidelityReport& f) {
   std::vector<Counter> counters{
       {"nodes_off_phase", "nodes off their phase", f.nodes_off_phase, true},
       {"interface_nodes_off_interface", "interface nodes off the interface", f.interface_nodes_off_interface, true},
       {"boundary_nodes_off_void", "void-boundary nodes off every void", f.boundary_nodes_off_void, true},
       {"cells_unknown_phase", "cells of an unknown or void phase", f.cells_unknown_phase, true},
   };
-  if (dimension == 3) {
+  if (f.centroids_checked) {
     counters.push_back({"cells_wrong_phase", "cells lying in another phase (centroid beyond half their size)",
                         f.cells_wrong_phase, true});
     counters.push_back({"cells_off_phase", "cells straddling an interface beyond the slack (allowed)", f.cells_off_phase,
@@ -203,31 +232,32 @@ std::string certificate_json(const Certificate& c) {
     phases.push_back(p);
   }
   j["cells_per_phase"] = phases;
-  const int dim = c.dimension == 3 ? 3 : 2;
+  const DimensionWords& w = words(c.dimension);
+  const int dim = w.coordinates;
   j["domain"] = {{"min", std::vector<double>(c.domain.min.begin(), c.domain.min.begin() + dim)},
                  {"max", std::vector<double>(c.domain.max.begin(), c.domain.max.begin() + dim)},
                  {"from", c.domain_from_scene ? "scene" : "mesh bounding box"}};
 
   const AspectStats& a = c.aspect;
   Json ar;
-  ar["definition"] = dim == 2 ? "l_max / (2 sqrt(3) r_in)" : "l_max / (2 sqrt(6) r_in)";
+  ar["definition"] = w.aspect_formula;
   ar["passed"] = c.quality_ok();
   ar["bound"] = a.bound;
   ar["max"] = number(a.max);
   ar["mean"] = number(a.mean);
   ar["count"] = a.count;
   ar["above_bound"] = a.above_bound;
-  ar[dim == 2 ? "min_angle_deg" : "min_dihedral_deg"] = number(a.min_angle_deg);
-  ar[dim == 2 ? "max_angle_deg" : "max_dihedral_deg"] = number(a.max_angle_deg);
+  ar[std::string("min_") + w.angle_key + "_deg"] = number(a.min_angle_deg);
+  ar[std::string("max_") + w.angle_key + "_deg"] = number(a.max_angle_deg);
   ar["histogram"] = {{"bin_edges", a.bin_edges},
                      {"counts", a.histogram},
                      {"note", "counts[i] is [bin_edges[i], bin_edges[i+1]); the last count is >= the last edge"}};
   Json worst = Json::array();
-  for (const auto& w : a.worst) {
-    worst.push_back({{"cell", w.cell},
-                     {"aspect_ratio", number(w.aspect_ratio)},
-                     {"centroid", std::vector<double>(w.centroid.begin(), w.centroid.begin() + dim)},
-                     {"phase", w.phase}});
+  for (const auto& cell : a.worst) {
+    worst.push_back({{"cell", cell.cell},
+                     {"aspect_ratio", number(cell.aspect_ratio)},
+                     {"centroid", std::vector<double>(cell.centroid.begin(), cell.centroid.begin() + dim)},
+                     {"phase", cell.phase}});
   }
   ar["worst"] = worst;
   j["aspect_ratio"] = ar;
@@ -248,9 +278,9 @@ std::string certificate_json(const Certificate& c) {
     Json fid;
     fid["ok"] = f.ok;
     fid["tolerance"] = f.tolerance;
-    for (const Counter& k : fidelity_counters(f, c.dimension)) fid[k.key] = k.value;
+    for (const Counter& k : fidelity_counters(f)) fid[k.key] = k.value;
     fid["max_deviation"] = number(f.max_deviation);
-    if (c.dimension == 3) fid["max_centroid_ratio"] = number(f.max_centroid_ratio);
+    if (f.centroids_checked) fid["max_centroid_ratio"] = number(f.max_centroid_ratio);
     Json per = Json::array();
     for (std::size_t k = 0; k < f.phase_id.size(); ++k)
       per.push_back({{"phase", f.phase_id[k]},
@@ -274,7 +304,7 @@ std::string certificate_json(const Certificate& c) {
 std::string certificate_html(const Certificate& c) {
   const AspectStats& a = c.aspect;
   const ConformityReport& r = c.conformity;
-  const bool is2d = c.dimension != 3;
+  const DimensionWords& w = words(c.dimension);
   std::ostringstream o;
   o << "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>cisamr certificate: "
     << html_escape(c.mesh_source) << "</title>\n<style>\n"
@@ -292,35 +322,33 @@ std::string certificate_html(const Certificate& c) {
   o << "<tr><th>scene</th><td>"
     << (c.scene_source.empty() ? "none (domain = bounding box of the mesh)" : "<code>" + html_escape(c.scene_source) + "</code>")
     << "</td></tr>\n";
-  o << "<tr><th>dimension</th><td>" << c.dimension << "D (" << (is2d ? "triangles" : "tetrahedra") << ")</td></tr>\n";
+  o << "<tr><th>dimension</th><td>" << c.dimension << "D (" << w.cells << ")</td></tr>\n";
   o << "<tr><th>nodes</th><td class=\"n\">" << c.node_count << "</td></tr>\n";
   o << "<tr><th>cells</th><td class=\"n\">" << c.cell_count << "</td></tr>\n";
   for (const auto& [id, n] : c.cells_per_phase)
     o << "<tr><th>cells of phase " << html_escape(phase_label(c, id)) << "</th><td class=\"n\">" << n << "</td></tr>\n";
   o << "</table>\n";
 
-  o << "<h2>Aspect ratio</h2>\n<p>Verdict definition: <code>"
-    << (is2d ? "l_max / (2&#8730;3 r_in)" : "l_max / (2&#8730;6 r_in)")
-    << "</code>, 1 for the " << (is2d ? "equilateral triangle" : "regular tetrahedron") << ".</p>\n<table>\n";
+  o << "<h2>Aspect ratio</h2>\n<p>Verdict definition: <code>" << w.aspect_formula_html << "</code>, 1 for the "
+    << w.regular_cell << ".</p>\n<table>\n";
   o << "<tr><th>bound</th><td class=\"n\">" << num(a.bound) << "</td><td></td></tr>\n";
   o << "<tr><th>maximum</th><td class=\"n\">" << num(a.max) << "</td>" << status_cell(c.quality_ok()) << "</tr>\n";
   o << "<tr><th>mean</th><td class=\"n\">" << num(a.mean) << "</td><td></td></tr>\n";
   o << "<tr><th>cells above the bound</th><td class=\"n\">" << a.above_bound << "</td>" << status_cell(a.above_bound == 0)
     << "</tr>\n";
-  o << "<tr><th>" << (is2d ? "smallest angle" : "smallest dihedral angle") << "</th><td class=\"n\">"
+  o << "<tr><th>smallest " << w.angle << "</th><td class=\"n\">"
     << num(a.min_angle_deg, 4) << "&#176;</td><td></td></tr>\n";
-  o << "<tr><th>" << (is2d ? "largest angle" : "largest dihedral angle") << "</th><td class=\"n\">"
+  o << "<tr><th>largest " << w.angle << "</th><td class=\"n\">"
     << num(a.max_angle_deg, 4) << "&#176;</td><td></td></tr>\n</table>\n";
   o << histogram_svg(a);
 
   o << "<h3>Worst elements</h3>\n<table>\n<tr><th>#</th><th>cell</th><th>aspect ratio</th><th>centroid</th><th>phase</th></tr>\n";
   for (std::size_t i = 0; i < a.worst.size(); ++i) {
-    const auto& w = a.worst[i];
-    o << "<tr><td class=\"n\">" << i + 1 << "</td><td class=\"n\">" << w.cell << "</td><td class=\"n"
-      << (w.aspect_ratio > a.bound ? " bad" : "") << "\">" << num(w.aspect_ratio) << "</td><td><code>(" << num(w.centroid[0], 8)
-      << ", " << num(w.centroid[1], 8);
-    if (!is2d) o << ", " << num(w.centroid[2], 8);
-    o << ")</code></td><td>" << html_escape(phase_label(c, w.phase)) << "</td></tr>\n";
+    const auto& cell = a.worst[i];
+    o << "<tr><td class=\"n\">" << i + 1 << "</td><td class=\"n\">" << cell.cell << "</td><td class=\"n"
+      << (cell.aspect_ratio > a.bound ? " bad" : "") << "\">" << num(cell.aspect_ratio) << "</td><td><code>(";
+    for (int d = 0; d < w.coordinates; ++d) o << (d ? ", " : "") << num(cell.centroid[d], 8);
+    o << ")</code></td><td>" << html_escape(phase_label(c, cell.phase)) << "</td></tr>\n";
   }
   o << "</table>\n";
 
@@ -335,23 +363,19 @@ std::string certificate_html(const Certificate& c) {
       << num(r.measure_error, 3) << "</td>" << status_cell(measure_ok(r)) << "</tr>\n";
   }
   o << "</table>\n";
-  if (!r.examples.empty()) {
-    o << "<ul>\n";
-    for (const auto& e : r.examples) o << "<li class=\"ex\">" << html_escape(e) << "</li>\n";
-    o << "</ul>\n";
-  }
+  examples_html(o, r.examples);
 
   o << "<h2>Phase fidelity</h2>\n";
   if (c.fidelity) {
     const FidelityReport& f = *c.fidelity;
     o << "<p>Tolerance " << num(f.tolerance, 3) << "; largest deviation found " << num(f.max_deviation, 3);
-    if (c.dimension == 3)
+    if (f.centroids_checked)
       o << "; largest centroid distance to its cell's phase " << num(f.max_centroid_ratio, 3)
         << " of the cell's longest edge (allowed " << num(kCentroidSlack) << ", " << num(kInterfaceCentroidSlack)
         << " for cells with every vertex on an interface)";
     o << ".</p>\n";
     o << "<table>\n<tr><th>check</th><th>count</th><th></th></tr>\n";
-    for (const Counter& k : fidelity_counters(f, c.dimension))
+    for (const Counter& k : fidelity_counters(f))
       o << "<tr><td>" << k.label << "</td><td class=\"n\">" << k.value << "</td>" << status_cell(k.value == 0) << "</tr>\n";
     o << "</table>\n<table>\n<tr><th>phase</th><th>meshed measure</th><th>exact measure</th><th>relative error</th></tr>\n";
     for (std::size_t k = 0; k < f.phase_id.size(); ++k) {
@@ -364,11 +388,7 @@ std::string certificate_html(const Certificate& c) {
           << "</td><td class=\"n\">" << num(f.relative_error[k], 3) << "</td></tr>\n";
     }
     o << "</table>\n";
-    if (!f.examples.empty()) {
-      o << "<ul>\n";
-      for (const auto& e : f.examples) o << "<li class=\"ex\">" << html_escape(e) << "</li>\n";
-      o << "</ul>\n";
-    }
+    examples_html(o, f.examples);
   } else {
     o << "<p>Not checked.</p>\n";
   }
@@ -386,12 +406,13 @@ std::string certificate_html(const Certificate& c) {
 std::string certificate_summary(const Certificate& c) {
   const AspectStats& a = c.aspect;
   const ConformityReport& r = c.conformity;
+  const DimensionWords& w = words(c.dimension);
   std::ostringstream o;
   o << "mesh: " << (c.mesh_source.empty() ? "(in memory)" : c.mesh_source) << ": " << c.dimension << "D, " << c.node_count
-    << " nodes, " << c.cell_count << (c.dimension == 2 ? " triangles" : " tetrahedra") << "\n";
+    << " nodes, " << c.cell_count << " " << w.cells << "\n";
   o << "aspect ratio: max " << num(a.max, 5) << ", mean " << num(a.mean, 5) << ", " << a.above_bound
     << " above the bound " << num(a.bound) << "\n";
-  o << (c.dimension == 2 ? "angles: " : "dihedral angles: ") << num(a.min_angle_deg, 4) << " to "
+  o << w.angle << "s: " << num(a.min_angle_deg, 4) << " to "
     << num(a.max_angle_deg, 4) << " degrees\n";
   o << "conformity: ";
   if (r.ok) {
@@ -399,8 +420,8 @@ std::string certificate_summary(const Certificate& c) {
   } else {
     std::string problems;
     for (const Counter& k : conformity_counters(r))
-      if (k.is_error && k.value > 0) problems += (problems.empty() ? "" : ", ") + std::to_string(k.value) + " " + k.label;
-    if (!measure_ok(r)) problems += (problems.empty() ? "" : ", ") + std::string("measure off by ") + num(r.measure_error, 3);
+      if (k.is_error && k.value > 0) add_item(problems, std::to_string(k.value) + " " + k.label);
+    if (!measure_ok(r)) add_item(problems, "measure off by " + num(r.measure_error, 3));
     o << "FAILED (" << problems << ")";
   }
   if (measure_checked(r)) o << "; measure " << num(r.measure, 10) << " (relative error " << num(r.measure_error, 3) << ")";
@@ -412,8 +433,8 @@ std::string certificate_summary(const Certificate& c) {
       o << "ok (largest deviation " << num(f.max_deviation, 3) << ", tolerance " << num(f.tolerance, 3) << ")";
     } else {
       std::string problems;
-      for (const Counter& k : fidelity_counters(f, c.dimension))
-        if (k.value > 0) problems += (problems.empty() ? "" : ", ") + std::to_string(k.value) + " " + k.label;
+      for (const Counter& k : fidelity_counters(f))
+        if (k.value > 0) add_item(problems, std::to_string(k.value) + " " + k.label);
       o << "FAILED (" << problems << "; largest deviation " << num(f.max_deviation, 3) << ")";
     }
     o << "\n";

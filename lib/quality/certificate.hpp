@@ -12,12 +12,6 @@
 #include "mesh/simplex_mesh.hpp"
 #include "quality/quality.hpp"
 
-namespace cisamr::geometry {
-class Oracle2;
-class Oracle3;
-struct SceneDesc;
-}  // namespace cisamr::geometry
-
 namespace cisamr::quality {
 
 // DESIGN.md §2.2: 3 in 2D, 5 in 3D.
@@ -61,19 +55,13 @@ struct Certificate {
 template <int Dim>
 Certificate certify(const mesh::SimplexMesh<Dim>& m, const Box<Dim>& domain, const CertifyOptions& options);
 
-// Against a scene, 2D: domain from the scene, expected measure = domain − voids (exact void
-// areas from the oracle), inner boundary allowed iff the scene has a void phase, plus the
-// phase-fidelity check. options.expected_measure/allow_inner_boundary are ignored.
-Certificate certify(const mesh::Mesh2& m, const geometry::Oracle2& oracle, const CertifyOptions& options);
-
-// Against a scene, 3D, as the 2D one: domain from the scene, expected volume = domain −
-// voids (Oracle3::phase_volumes), inner boundary allowed iff the scene has a void phase,
-// plus the 3D phase-fidelity check (nodes, centroids, per-phase volumes).
-Certificate certify(const mesh::Mesh3& m, const geometry::Oracle3& oracle, const CertifyOptions& options);
-
-// Against a scene without its oracle (cheap; no fidelity): domain from the scene; expected
-// volume = domain volume when the scene has no void (not checked otherwise).
-Certificate certify(const mesh::Mesh3& m, const geometry::SceneDesc& scene, const CertifyOptions& options);
+// Against a scene: domain from the scene, expected measure = domain − voids (the oracle's
+// exact void measures), inner boundary allowed iff the scene has a void phase (the total
+// measure then checked to kVoidMeasureTolerance only), plus the phase-fidelity check
+// (check_fidelity: nodes, in 3D centroids, per-phase measures).
+// options.expected_measure/allow_inner_boundary are ignored.
+template <int Dim>
+Certificate certify(const mesh::SimplexMesh<Dim>& m, const OracleOf<Dim>& oracle, const CertifyOptions& options);
 
 std::string certificate_json(const Certificate& c);     // format "cisamr-certificate/1"
 std::string certificate_html(const Certificate& c);     // one page, inline SVG and CSS

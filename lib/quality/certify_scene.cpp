@@ -1,22 +1,14 @@
-// Certification against a scene: the domain, the expected measure and (2D) phase fidelity
-// come from the scene. Kept apart from certificate.cpp so that users of the scene-free
-// certificate do not link the geometry oracle.
+// Certification against a scene, 2D and 3D: the domain, the expected measure (domain minus
+// the exact void measures) and phase fidelity come from the scene's oracle. Kept apart
+// from certificate.cpp so that users of the scene-free certificate do not link the oracles.
 #include <algorithm>
 #include <cstdio>
 
-#include "geometry/oracle2.hpp"
-#include "geometry/scene.hpp"
 #include "quality/certificate.hpp"
+#include "quality/scene_queries.hpp"
 
 namespace cisamr::quality {
 namespace {
-
-template <int Dim>
-Box<Dim> scene_domain(const geometry::SceneDesc& scene) {
-  Box<Dim> b;
-  for (int d = 0; d < Dim; ++d) b.min[d] = scene.domain_min[d], b.max[d] = scene.domain_max[d];
-  return b;
-}
 
 template <int Dim>
 double box_measure(const Box<Dim>& b) {
@@ -25,60 +17,46 @@ double box_measure(const Box<Dim>& b) {
   return v;
 }
 
-bool has_void(const geometry::SceneDesc& scene) {
-  return std::any_of(scene.phases.begin(), scene.phases.end(), [](const geometry::Phase& p) { return p.is_void; });
-}
-
-void describe_scene(const geometry::SceneDesc& scene, Certificate& c) {
-  c.scene_source = scene.source;
-  c.domain_from_scene = true;
-  for (const geometry::Phase& p : scene.phases) c.phase_names.emplace_back(p.id, p.name);
-}
+// How the certificate's note names the total measure and the meshed void boundaries.
+template <int Dim>
+constexpr const char* kMeasureName = Dim == 2 ? "measure" : "volume";
+template <int Dim>
+constexpr const char* kMeshedBoundary = Dim == 2 ? "polygonal" : "polyhedral";
 
 }  // namespace
 
-Certificate certify(const mesh::Mesh2& m, const geometry::Oracle2& oracle, const CertifyOptions& options) {
+template <int Dim>
+Certificate certify(const mesh::SimplexMesh<Dim>& m, const OracleOf<Dim>& oracle, const CertifyOptions& options) {
   const geometry::SceneDesc& scene = oracle.scene();
-  const Box2 domain = scene_domain<2>(scene);
+  const Box<Dim> domain = detail::scene_domain<Dim>(scene);
   CertifyOptions o = options;
-  o.allow_inner_boundary = has_void(scene);
+  o.allow_inner_boundary =
+      std::any_of(scene.phases.begin(), scene.phases.end(), [](const geometry::Phase& p) { return p.is_void; });
+  const std::vector<double> exact = detail::exact_phase_measures<Dim>(oracle);
   double expected = box_measure(domain);
-  const std::vector<double> areas = oracle.phase_areas();
-  for (std::size_t k = 0; k < scene.phases.size() && k < areas.size(); ++k)
-    if (scene.phases[k].is_void) expected -= areas[k];
+  for (std::size_t k = 0; k < scene.phases.size() && k < exact.size(); ++k)
+    if (scene.phases[k].is_void) expected -= exact[k];
   o.expected_measure = expected;
   if (o.allow_inner_boundary) o.measure_tolerance = std::max(o.measure_tolerance, kVoidMeasureTolerance);
 
-  Certificate c = certify<2>(m, domain, o);
-  describe_scene(scene, c);
+  Certificate c = certify<Dim>(m, domain, o);
+  c.scene_source = scene.source;
+  c.domain_from_scene = true;
+  for (const geometry::Phase& p : scene.phases) c.phase_names.emplace_back(p.id, p.name);
   if (o.allow_inner_boundary) {
     char buf[200];
     std::snprintf(buf, sizeof buf,
-                  "the scene has voids: total measure checked to %g only (void boundaries are polygonal); "
+                  "the scene has voids: total %s checked to %g only (void boundaries are %s); "
                   "open facets inside the domain are checked to lie on a void instead",
-                  o.measure_tolerance);
+                  kMeasureName<Dim>, o.measure_tolerance, kMeshedBoundary<Dim>);
     c.notes.push_back(buf);
   }
   const double tol = options.fidelity_tolerance >= 0 ? options.fidelity_tolerance : default_fidelity_tolerance(scene);
-  c.fidelity = check_fidelity(m, oracle, tol);
+  c.fidelity = check_fidelity<Dim>(m, oracle, tol, exact);
   return c;
 }
 
-Certificate certify(const mesh::Mesh3& m, const geometry::SceneDesc& scene, const CertifyOptions& options) {
-  const Box3 domain = scene_domain<3>(scene);
-  CertifyOptions o = options;
-  o.allow_inner_boundary = has_void(scene);
-  o.expected_measure = o.allow_inner_boundary ? -1 : box_measure(domain);
-  Certificate c = certify<3>(m, domain, o);
-  describe_scene(scene, c);
-  if (o.allow_inner_boundary) {
-    c.notes.erase(std::remove_if(c.notes.begin(), c.notes.end(),
-                                 [](const std::string& n) { return n.rfind("total measure", 0) == 0; }),
-                  c.notes.end());
-    c.notes.push_back("the scene has voids: total volume not checked (certified without the geometry oracle)");
-  }
-  c.notes.push_back("phase fidelity not checked (certified without the geometry oracle)");
-  return c;
-}
+template Certificate certify<2>(const mesh::SimplexMesh<2>&, const OracleOf<2>&, const CertifyOptions&);
+template Certificate certify<3>(const mesh::SimplexMesh<3>&, const OracleOf<3>&, const CertifyOptions&);
 
 }  // namespace cisamr::quality

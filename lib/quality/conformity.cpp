@@ -6,6 +6,7 @@
 #include <string>
 
 #include "mesh/metrics.hpp"
+#include "quality/cell_geometry.hpp"
 #include "quality/facet_table.hpp"
 #include "quality/quality.hpp"
 
@@ -57,22 +58,6 @@ class Examples {
     }
   } counts_;
 };
-
-template <int Dim>
-double signed_measure(const mesh::SimplexMesh<Dim>& m, const LocalId* n) {
-  if constexpr (Dim == 2)
-    return mesh::signed_area(m.point(n[0]), m.point(n[1]), m.point(n[2]));
-  else
-    return mesh::signed_volume(m.point(n[0]), m.point(n[1]), m.point(n[2]), m.point(n[3]));
-}
-
-template <int Dim>
-double longest_edge(const mesh::SimplexMesh<Dim>& m, const LocalId* n, int count) {
-  double l = 0;
-  for (int i = 0; i < count; ++i)
-    for (int j = i + 1; j < count; ++j) l = std::max(l, mesh::distance<Dim>(m.point(n[i]), m.point(n[j])));
-  return l;
-}
 
 // ---- near-duplicate nodes: a hash grid of cells 2·eps wide ----------------------------
 // A node at fractional position f in its cell can only be within eps of nodes in its own
@@ -237,7 +222,7 @@ void find_hanging_nodes(const mesh::SimplexMesh<Dim>& m, const std::vector<detai
       box.max[d] = std::max(box.max[d], m.coords[std::size_t(n) * Dim + d]);
     }
   double mean_length = 0;
-  for (const auto& f : open) mean_length += longest_edge(m, f.data(), Dim);
+  for (const auto& f : open) mean_length += detail::longest_edge(m, f.data(), Dim);
   mean_length /= static_cast<double>(open.size());
   double cell = mean_length > 0 ? mean_length : 1.0;
   std::array<std::size_t, Dim> dims;
@@ -282,7 +267,7 @@ void find_hanging_nodes(const mesh::SimplexMesh<Dim>& m, const std::vector<detai
   for (const auto& f : open) {
     std::array<Vec<Dim>, Dim> pts;
     for (int k = 0; k < Dim; ++k) pts[k] = m.point(f[k]);
-    const double tol = kOnFacetTolerance * longest_edge(m, f.data(), Dim);
+    const double tol = kOnFacetTolerance * detail::longest_edge(m, f.data(), Dim);
     std::array<std::size_t, Dim> lo, hi;
     for (int d = 0; d < Dim; ++d) {
       double a = pts[0][d], b = pts[0][d];
@@ -357,9 +342,9 @@ ConformityReport check_conformity(const mesh::SimplexMesh<Dim>& m, const Box<Dim
       continue;
     }
     for (int k = 0; k <= Dim; ++k) used[std::size_t(cn[k])] = true;
-    const double s = signed_measure(m, cn);
+    const double s = detail::signed_measure(m, cn);
     measure += std::abs(s);
-    const double l = longest_edge(m, cn, Dim + 1);
+    const double l = detail::longest_edge(m, cn, Dim + 1);
     const double scale = Dim == 2 ? l * l : l * l * l;
     if (!(std::abs(s) > kDegenerateTolerance * scale)) {
       ++r.degenerate_cells;

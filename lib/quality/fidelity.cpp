@@ -1,25 +1,111 @@
-// Phase fidelity (DESIGN.md §2.3) of a 2D mesh against the scene's oracle.
+// Phase fidelity (DESIGN.md §2.3) of a 2D or 3D mesh against the scene's oracle: nodes in
+// the closure of their cells' phases, void-interface nodes on a void, (3D) centroids in or
+// near their cell's phase, per-phase measures against the oracle's exact or integrated
+// ones (README.md, "Phase fidelity").
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <limits>
 #include <string>
 
-#include "geometry/oracle2.hpp"
-#include "mesh/metrics.hpp"
+#include "quality/cell_geometry.hpp"
 #include "quality/facet_table.hpp"
 #include "quality/quality.hpp"
+#include "quality/scene_queries.hpp"
 
 namespace cisamr::quality {
 namespace {
 
 constexpr std::size_t kMaxExamples = 24;
+constexpr double kInf = std::numeric_limits<double>::infinity();
 
-std::string node_text(const mesh::Mesh2& m, std::size_t n) {
-  char buf[80];
-  std::snprintf(buf, sizeof buf, "%zu (%.12g, %.12g)", n, m.coords[2 * n], m.coords[2 * n + 1]);
+// Oracle3's distance to a cluster of ellipsoids, cylinders or STL surfaces comes from
+// surface samples (geometry/README.md: an upper bound, coarse and slow), so 3D questions
+// try exact classifications of nearby points first. Oracle2's distance is exact and is
+// reported as found.
+template <int Dim>
+constexpr bool kProbeBeforeDistance = Dim == 3;
+
+// The centroid check runs in 3D only: the 2D certificate (cisamr-certificate/1) has no
+// centroid counters.
+template <int Dim>
+constexpr bool kCentroidCheck = Dim == 3;
+
+template <int Dim>
+std::string point_text(const Vec<Dim>& p) {
+  char buf[96];
+  if constexpr (Dim == 2)
+    std::snprintf(buf, sizeof buf, "(%.12g, %.12g)", p[0], p[1]);
+  else
+    std::snprintf(buf, sizeof buf, "(%.12g, %.12g, %.12g)", p[0], p[1], p[2]);
   return buf;
 }
+
+template <int Dim>
+std::string node_text(std::size_t n, const Vec<Dim>& p) {
+  return std::to_string(n) + " " + point_text<Dim>(p);
+}
+
+// The 3^Dim − 1 directions to the neighbours of a cell in a 3×…×3 block, unit length, the
+// last axis varying fastest.
+template <int Dim>
+constexpr int kProbeDirections = Dim == 2 ? 8 : 26;  // 3^Dim − 1
+
+template <int Dim>
+std::array<Vec<Dim>, kProbeDirections<Dim>> probe_directions() {
+  std::array<Vec<Dim>, kProbeDirections<Dim>> dirs{};
+  std::size_t n = 0;
+  for (int code = 0; code <= kProbeDirections<Dim>; ++code) {
+    std::array<int, Dim> step;
+    int squares = 0;
+    for (int d = Dim - 1, rest = code; d >= 0; --d, rest /= 3) step[d] = rest % 3 - 1;
+    for (int d = 0; d < Dim; ++d) squares += step[d] * step[d];
+    if (squares == 0) continue;
+    const double len = std::sqrt(double(squares));
+    for (int d = 0; d < Dim; ++d) dirs[n][d] = step[d] / len;
+    ++n;
+  }
+  return dirs;
+}
+
+// Geometry questions of the check, with the candidate buffer reused.
+template <int Dim>
+class Probe {
+ public:
+  explicit Probe(const OracleOf<Dim>& oracle) : oracle_(oracle) {
+    if constexpr (kProbeBeforeDistance<Dim>) dirs_ = probe_directions<Dim>();
+  }
+
+  PhaseMask closure(const Vec<Dim>& p) {
+    oracle_.candidates(Box<Dim>{p, p}, candidates_);
+    return oracle_.closure_phases(p, candidates_);
+  }
+
+  // Distance from p to the closure of phase k. In 3D, an upper bound of it no larger than
+  // `limit` when one can be proven (reported deviations are then such bounds): a point of
+  // phase k at distance limit·{1e-6, 1e-3, 1} in one of the probe directions around p.
+  // Most questions (a snapped node a rounding error off its surface, a centroid a sagitta
+  // across a curved interface) are settled by a probe.
+  double distance(const Vec<Dim>& p, int k, double limit) {
+    if constexpr (kProbeBeforeDistance<Dim>) {
+      const PhaseMask bit = PhaseMask(1) << k;
+      if (limit > 0)
+        for (double r : {1e-6 * limit, 1e-3 * limit, limit})
+          for (const Vec<Dim>& u : dirs_) {
+            Vec<Dim> q;
+            for (int d = 0; d < Dim; ++d) q[d] = p[d] + r * u[d];
+            if (closure(q) & bit) return r;  // an upper bound within the limit: settled
+          }
+    }
+    return oracle_.distance_to_phase(p, k);
+  }
+
+ private:
+  const OracleOf<Dim>& oracle_;
+  std::array<Vec<Dim>, kProbeDirections<Dim>> dirs_{};
+  std::vector<std::int32_t> candidates_;
+};
 
 }  // namespace
 
@@ -32,10 +118,13 @@ double default_fidelity_tolerance(const geometry::SceneDesc& scene) {
   return 1e-9 * std::sqrt(s);
 }
 
-FidelityReport check_fidelity(const mesh::Mesh2& m, const geometry::Oracle2& oracle, double tol) {
+template <int Dim>
+FidelityReport check_fidelity(const mesh::SimplexMesh<Dim>& m, const OracleOf<Dim>& oracle, double tol,
+                              std::span<const double> exact_measures, double strict_tol) {
   const geometry::SceneDesc& scene = oracle.scene();
   FidelityReport r;
   r.tolerance = tol;
+  r.centroids_checked = kCentroidCheck<Dim>;
   const int phases = static_cast<int>(scene.phases.size());
   for (const geometry::Phase& p : scene.phases) {
     r.phase_id.push_back(p.id);
@@ -43,17 +132,22 @@ FidelityReport check_fidelity(const mesh::Mesh2& m, const geometry::Oracle2& ora
     r.phase_is_void.push_back(p.is_void);
   }
   r.phase_measure.assign(phases, 0.0);
-  r.exact_phase_measure = oracle.phase_areas();
+  if (exact_measures.empty())
+    r.exact_phase_measure = detail::exact_phase_measures<Dim>(oracle);
+  else
+    r.exact_phase_measure.assign(exact_measures.begin(), exact_measures.end());
   r.exact_phase_measure.resize(phases, 0.0);
   r.relative_error.assign(phases, std::numeric_limits<double>::quiet_NaN());
   auto example = [&](std::string s) {
     if (r.examples.size() < kMaxExamples) r.examples.push_back(std::move(s));
   };
+  Probe<Dim> probe(oracle);
 
   // Phases around every node (bit = phase index), per-phase measure.
   const std::size_t nodes = m.node_count();
   const std::vector<bool> valid = detail::valid_cells(m);
   std::vector<PhaseMask> around(nodes, 0);
+  std::vector<int> cell_phase_index(m.cell_count(), -1);
   for (std::size_t c = 0; c < m.cell_count(); ++c) {
     if (!valid[c]) continue;
     const int id = c < m.cell_phase.size() ? m.cell_phase[c] : 0;
@@ -65,37 +159,46 @@ FidelityReport check_fidelity(const mesh::Mesh2& m, const geometry::Oracle2& ora
                 (k < 0 ? ", which the scene does not define" : ", a void phase (voids are not meshed)"));
       continue;
     }
+    cell_phase_index[c] = k;
     const LocalId* cn = m.cell(c);
-    r.phase_measure[std::size_t(k)] += std::abs(mesh::signed_area(m.point(cn[0]), m.point(cn[1]), m.point(cn[2])));
-    for (int v = 0; v < 3; ++v) around[std::size_t(cn[v])] |= PhaseMask(1) << k;
+    r.phase_measure[std::size_t(k)] += std::abs(detail::signed_measure(m, cn));
+    for (int v = 0; v <= Dim; ++v) around[std::size_t(cn[v])] |= PhaseMask(1) << k;
   }
   for (int k = 0; k < phases; ++k) {
     if (scene.phases[std::size_t(k)].is_void) continue;
     const double exact = r.exact_phase_measure[std::size_t(k)], got = r.phase_measure[std::size_t(k)];
-    r.relative_error[std::size_t(k)] =
-        exact > 0 ? std::abs(got - exact) / exact : (got > 0 ? std::numeric_limits<double>::infinity() : 0.0);
+    r.relative_error[std::size_t(k)] = exact > 0 ? std::abs(got - exact) / exact : (got > 0 ? kInf : 0.0);
   }
 
-  // Every node must lie in the closure of each phase it touches.
-  // The exact classification settles almost every node; distances (costly for NURBS) are
-  // computed only for the phases a node's closure does not contain.
+  // Every node must lie in the closure of each phase it serves. The exact classification
+  // settles almost every node; distances (costly for NURBS, clusters and STL surfaces) only
+  // for the phases its closure lacks. A node counts as "on the interface" for the centroid
+  // check when its closure holds a phase other than a cell's (or it serves several phases,
+  // or lies off one within tol).
+  std::vector<PhaseMask> node_closure(nodes, 0);
   std::size_t shown_off_phase = 0, shown_off_interface = 0;
-  std::vector<std::int32_t> candidates;
+  const bool strict = strict_tol >= 0 && strict_tol < tol;
   for (std::size_t n = 0; n < nodes; ++n) {
     const PhaseMask mask = around[n];
     if (mask == 0) continue;
     const bool interface = (mask & (mask - 1)) != 0;
-    const Vec2 p = m.point(LocalId(n));
-    oracle.candidates(Box2{p, p}, candidates);
-    const PhaseMask closure = oracle.closure_phases(p, candidates);
+    const Vec<Dim> p = m.point(LocalId(n));
+    const PhaseMask closure = probe.closure(p);
+    node_closure[n] = closure;
     if ((mask & ~closure) == 0) continue;
     double worst = 0;
     int worst_phase = -1;
+    bool beyond_strict = false;
     for (int k = 0; k < phases && k < 64; ++k) {
       if (!(mask >> k & 1) || (closure >> k & 1)) continue;
-      const double d = oracle.distance_to_phase(p, k);
+      double d = probe.distance(p, k, strict ? strict_tol : tol);
+      if (strict && !(d <= strict_tol)) {
+        beyond_strict = true;
+        if (!(d <= tol)) d = probe.distance(p, k, tol);  // the strict probes may not settle tol
+      }
       if (!(d <= worst)) worst = d, worst_phase = k;  // NaN counts as off
     }
+    r.nodes_beyond_strict += beyond_strict ? 1 : 0;
     if (std::isfinite(worst)) r.max_deviation = std::max(r.max_deviation, worst);
     if (worst <= tol) continue;
     char buf[96];
@@ -103,30 +206,58 @@ FidelityReport check_fidelity(const mesh::Mesh2& m, const geometry::Oracle2& ora
                   worst_phase >= 0 ? scene.phases[std::size_t(worst_phase)].id : -1);
     if (interface) {
       ++r.interface_nodes_off_interface;
-      if (shown_off_interface++ < 3) example("interface node " + node_text(m, n) + buf);
+      if (shown_off_interface++ < 3) example("interface node " + node_text<Dim>(n, p) + buf);
     } else {
       ++r.nodes_off_phase;
-      if (shown_off_phase++ < 3) example("node " + node_text(m, n) + buf);
+      if (shown_off_phase++ < 3) example("node " + node_text<Dim>(n, p) + buf);
+    }
+  }
+
+  // Centroids: in the cell's phase, or within the slack of README.md (counted beyond it,
+  // failed beyond kWrongPhaseRatio).
+  if constexpr (kCentroidCheck<Dim>) {
+    std::size_t shown_cells = 0;
+    for (std::size_t c = 0; c < m.cell_count(); ++c) {
+      const int k = cell_phase_index[c];
+      if (k < 0) continue;
+      const LocalId* cn = m.cell(c);
+      const Vec<Dim> g = detail::centroid(m, cn);
+      const PhaseMask bit = PhaseMask(1) << k;
+      if (probe.closure(g) & bit) continue;
+      bool all_on_interface = true;
+      for (int i = 0; i <= Dim; ++i) all_on_interface = all_on_interface && node_closure[std::size_t(cn[i])] != bit;
+      const double l = detail::longest_edge(m, cn, Dim + 1);
+      const double allowed = std::max(tol, (all_on_interface ? kInterfaceCentroidSlack : kCentroidSlack) * l);
+      const double d = probe.distance(g, k, allowed);
+      if (l > 0 && std::isfinite(d)) r.max_centroid_ratio = std::max(r.max_centroid_ratio, d / l);
+      if (d <= allowed) continue;
+      ++r.cells_off_phase;
+      const bool wrong = !(d <= std::max(tol, kWrongPhaseRatio * l));
+      r.cells_wrong_phase += wrong ? 1 : 0;
+      if (shown_cells++ < 3) {
+        char buf[160];
+        std::snprintf(buf, sizeof buf, " is %.3g (%.3g of its longest edge) from phase %d%s%s", d,
+                      l > 0 ? d / l : kInf, scene.phases[std::size_t(k)].id,
+                      all_on_interface ? " (all its vertices on an interface)" : "", wrong ? ": in another phase" : "");
+        example("centroid " + point_text<Dim>(g) + " of cell " + std::to_string(c) + buf);
+      }
     }
   }
 
   // Open facets inside the domain are void interfaces: their nodes must lie on a void.
-  Box2 domain;
-  domain.min = {scene.domain_min[0], scene.domain_min[1]};
-  domain.max = {scene.domain_max[0], scene.domain_max[1]};
+  const Box<Dim> domain = detail::scene_domain<Dim>(scene);
   const std::vector<LocalId> boundary_nodes =
-      detail::open_facet_nodes_inside_box<2>(m, domain, kOnBoxTolerance * box_diagonal(domain));
+      detail::open_facet_nodes_inside_box<Dim>(m, domain, kOnBoxTolerance * box_diagonal(domain));
   std::size_t shown_off_void = 0;
   PhaseMask void_mask = 0;
   for (int k = 0; k < phases && k < 64; ++k)
     if (scene.phases[std::size_t(k)].is_void) void_mask |= PhaseMask(1) << k;
   for (LocalId n : boundary_nodes) {
-    const Vec2 p = m.point(n);
-    oracle.candidates(Box2{p, p}, candidates);
-    if (oracle.closure_phases(p, candidates) & void_mask) continue;
-    double nearest = std::numeric_limits<double>::infinity();
-    for (int k = 0; k < phases; ++k)
-      if (scene.phases[std::size_t(k)].is_void) nearest = std::min(nearest, oracle.distance_to_phase(m.point(n), k));
+    const Vec<Dim> p = m.point(n);
+    if (probe.closure(p) & void_mask) continue;
+    double nearest = kInf;
+    for (int k = 0; k < phases && k < 64; ++k)
+      if (scene.phases[std::size_t(k)].is_void) nearest = std::min(nearest, probe.distance(p, k, tol));
     if (std::isfinite(nearest)) r.max_deviation = std::max(r.max_deviation, nearest);
     if (nearest <= tol) continue;
     ++r.boundary_nodes_off_void;
@@ -136,13 +267,18 @@ FidelityReport check_fidelity(const mesh::Mesh2& m, const geometry::Oracle2& ora
         std::snprintf(buf, sizeof buf, " is %.3g from the nearest void", nearest);
       else
         std::snprintf(buf, sizeof buf, " (the scene has no void)");
-      example("node " + node_text(m, std::size_t(n)) + " of an open facet inside the domain" + buf);
+      example("node " + node_text<Dim>(std::size_t(n), p) + " of an open facet inside the domain" + buf);
     }
   }
 
-  r.ok = r.nodes_off_phase == 0 && r.interface_nodes_off_interface == 0 &&
-         r.boundary_nodes_off_void == 0 && r.cells_unknown_phase == 0;
+  r.ok = r.nodes_off_phase == 0 && r.interface_nodes_off_interface == 0 && r.boundary_nodes_off_void == 0 &&
+         r.cells_unknown_phase == 0 && r.cells_wrong_phase == 0;
   return r;
 }
+
+template FidelityReport check_fidelity<2>(const mesh::SimplexMesh<2>&, const OracleOf<2>&, double,
+                                          std::span<const double>, double);
+template FidelityReport check_fidelity<3>(const mesh::SimplexMesh<3>&, const OracleOf<3>&, double,
+                                          std::span<const double>, double);
 
 }  // namespace cisamr::quality

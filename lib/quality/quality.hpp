@@ -8,18 +8,21 @@
 #include <cstdint>
 #include <span>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "core/types.hpp"
+#include "geometry/oracle2.hpp"
+#include "geometry/oracle3.hpp"
+#include "geometry/scene.hpp"
 #include "mesh/simplex_mesh.hpp"
 
-namespace cisamr::geometry {
-class Oracle2;
-class Oracle3;
-struct SceneDesc;
-}  // namespace cisamr::geometry
-
 namespace cisamr::quality {
+
+// The geometry oracle of a dimension: the only place that names the per-dimension oracle
+// classes (the checks against a scene are written once, for both).
+template <int Dim>
+using OracleOf = std::conditional_t<Dim == 2, geometry::Oracle2, geometry::Oracle3>;
 
 // ---------------------------------------------------------------------------------------
 // Aspect ratio (Verdict definition, mesh/metrics.hpp) and angles.
@@ -102,16 +105,16 @@ ConformityReport check_conformity(const mesh::SimplexMesh<Dim>& m, const Box<Dim
                                   double measure_tolerance = kDefaultMeasureTolerance);
 
 // ---------------------------------------------------------------------------------------
-// Phase fidelity (DESIGN.md §2.3), 2D and 3D.
+// Phase fidelity (DESIGN.md §2.3), one check for 2D and 3D.
 // ---------------------------------------------------------------------------------------
 
-// 3D centroid check (README.md, "Phase fidelity"): the centroid of a phase-k tetrahedron
-// may lie outside phase k by at most max(tol, slack · l_max), l_max its longest edge. A
-// tet whose vertices all lie on phase k's boundary (every vertex's closure holds another
-// phase) hugs a curved surface: its centroid is off by the surface's sagitta, which only
-// the curvature bounds, hence the larger slack. A tet with a vertex strictly inside phase
-// k reaches at most a few per cent of l_max outside it. A tet of the wrong phase is off by
-// a sizeable fraction of its size.
+// Centroid check (README.md, "Phase fidelity"), run in 3D: the centroid of a phase-k
+// tetrahedron may lie outside phase k by at most max(tol, slack · l_max), l_max its
+// longest edge. A tet whose vertices all lie on phase k's boundary (every vertex's
+// closure holds another phase) hugs a curved surface: its centroid is off by the
+// surface's sagitta, which only the curvature bounds, hence the larger slack. A tet with a
+// vertex strictly inside phase k reaches at most a few per cent of l_max outside it. A tet
+// of the wrong phase is off by a sizeable fraction of its size.
 inline constexpr double kCentroidSlack = 0.1;
 inline constexpr double kInterfaceCentroidSlack = 0.25;
 // A centroid farther than this fraction of the tet's longest edge from the tet's phase
@@ -133,13 +136,15 @@ struct FidelityReport {
   std::size_t boundary_nodes_off_void = 0;
   std::size_t cells_unknown_phase = 0;  // cell phase id not in the scene, or a void phase
   double max_deviation = 0;             // largest distance found in the node checks above
-  // With strict_tol ≥ 0 (3D): nodes of the checks above farther than strict_tol (≤ tol) from
-  // a phase they serve, e.g. the nodes a collapse moved off, checked against tol.
+  // With strict_tol ≥ 0: nodes of the checks above farther than strict_tol (≤ tol) from a
+  // phase they serve, e.g. the nodes a collapse moved off, checked against tol.
   std::size_t nodes_beyond_strict = 0;
-  // 3D only (0 in 2D): cells whose centroid lies farther from their phase than the slack
-  // (kCentroidSlack, kInterfaceCentroidSlack; reported), cells whose centroid lies beyond
-  // kWrongPhaseRatio of their longest edge (a failure), and the largest ratio (centroid's
-  // distance to the cell's phase) / (cell's longest edge) found.
+  // Whether the centroid check ran (3D); without it the three fields below stay 0: cells
+  // whose centroid lies farther from their phase than the slack (kCentroidSlack,
+  // kInterfaceCentroidSlack; reported), cells whose centroid lies beyond kWrongPhaseRatio
+  // of their longest edge (a failure), and the largest ratio (centroid's distance to the
+  // cell's phase) / (cell's longest edge) found.
+  bool centroids_checked = false;
   std::size_t cells_off_phase = 0;
   std::size_t cells_wrong_phase = 0;
   double max_centroid_ratio = 0;
@@ -155,17 +160,18 @@ struct FidelityReport {
 // 1e-9 × the domain diagonal (DESIGN.md §2.3, analytic shapes).
 double default_fidelity_tolerance(const geometry::SceneDesc& scene);
 
-FidelityReport check_fidelity(const mesh::Mesh2& m, const geometry::Oracle2& oracle, double tol);
-
-// 3D: the node checks of the 2D version (a node within tol of the closure of every phase
-// of its cells, void-boundary nodes on a void), the centroid check above, and per-phase
-// volumes against Oracle3::phase_volumes() (spheres, ellipsoids, cylinders and closed STL
-// surfaces, clipped by the box, overlapping unions included).
-// `exact_volumes`: the oracle's phase_volumes() when the caller has them already (they
+// Every node within tol of the closure of each phase of its cells, the nodes of open
+// facets inside the domain (void interfaces) within tol of a void, every cell of a known,
+// non-void phase; in 3D the centroid check above. Per-phase measures against the oracle's
+// (areas of circles, ellipses, polygons, NURBS; volumes of spheres, ellipsoids, cylinders
+// and closed STL surfaces, clipped by the box, overlapping unions included), reported,
+// not judged.
+// `exact_measures`: the oracle's per-phase measures when the caller has them already (they
 // are integrated for clipped or overlapping inclusions); empty: computed here.
 // `strict_tol` (optional, ≤ tol): also count the nodes beyond it (nodes_beyond_strict).
-FidelityReport check_fidelity(const mesh::Mesh3& m, const geometry::Oracle3& oracle, double tol,
-                              std::span<const double> exact_volumes = {}, double strict_tol = -1);
+template <int Dim>
+FidelityReport check_fidelity(const mesh::SimplexMesh<Dim>& m, const OracleOf<Dim>& oracle, double tol,
+                              std::span<const double> exact_measures = {}, double strict_tol = -1);
 
 // ---------------------------------------------------------------------------------------
 // Small helpers shared by the certificate and the command.

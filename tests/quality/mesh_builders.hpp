@@ -3,6 +3,7 @@
 // and helpers to break them on purpose.
 #include <array>
 #include <cmath>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -11,16 +12,14 @@
 
 namespace cisamr::quality::testing {
 
-inline LocalId add_node(mesh::Mesh2& m, double x, double y) {
-  m.coords.insert(m.coords.end(), {x, y});
+template <int Dim>
+LocalId add_node(mesh::SimplexMesh<Dim>& m, const std::type_identity_t<Vec<Dim>>& p) {
+  m.coords.insert(m.coords.end(), p.begin(), p.end());
   m.node_global_id.push_back(static_cast<GlobalId>(m.node_count() - 1));
   return static_cast<LocalId>(m.node_count() - 1);
 }
-inline LocalId add_node(mesh::Mesh3& m, double x, double y, double z) {
-  m.coords.insert(m.coords.end(), {x, y, z});
-  m.node_global_id.push_back(static_cast<GlobalId>(m.node_count() - 1));
-  return static_cast<LocalId>(m.node_count() - 1);
-}
+inline LocalId add_node(mesh::Mesh2& m, double x, double y) { return add_node(m, Vec2{x, y}); }
+inline LocalId add_node(mesh::Mesh3& m, double x, double y, double z) { return add_node(m, Vec3{x, y, z}); }
 template <int Dim>
 void add_cell(mesh::SimplexMesh<Dim>& m, std::array<LocalId, Dim + 1> nodes, int phase = 1) {
   m.cell_nodes.insert(m.cell_nodes.end(), nodes.begin(), nodes.end());

@@ -1,9 +1,12 @@
-// Phase fidelity against the 2D oracle, and certification against a scene.
+// Phase fidelity against the 2D and 3D oracles, and certification against a scene.
 #include <gtest/gtest.h>
 
 #include <nlohmann/json.hpp>
+#include <string>
+#include <utility>
 
 #include "geometry/oracle2.hpp"
+#include "geometry/oracle3.hpp"
 #include "geometry/scene.hpp"
 #include "mesh_builders.hpp"
 #include "quality/certificate.hpp"
@@ -13,21 +16,28 @@ namespace cisamr::quality {
 namespace {
 using namespace testing;
 
-// [0,1]² with the square [0.25,0.75]² as phase 2 (a void when asked).
-geometry::SceneDesc square_scene(bool inclusion_is_void) {
+// [0, size]^dimension with one inclusion of phase 2, named `name` or, when asked, a void.
+geometry::SceneDesc one_inclusion_scene(int dimension, double size, geometry::Shape shape, const std::string& name,
+                                        bool inclusion_is_void) {
   geometry::SceneDesc s;
-  s.source = "square-scene.json";
-  s.dimension = 2;
+  s.source = name + "-scene.json";
+  s.dimension = dimension;
   s.domain_min = {0, 0, 0};
-  s.domain_max = {1, 1, 0};
-  s.h = 0.25;
-  s.phases = {{1, "matrix", false}, {2, inclusion_is_void ? "pore" : "square", inclusion_is_void}};
+  s.domain_max = {size, size, dimension == 3 ? size : 0};
+  s.h = dimension == 3 ? 1 : 0.25;
+  s.phases = {{1, "matrix", false}, {2, inclusion_is_void ? "pore" : name, inclusion_is_void}};
   s.matrix_phase = 1;
   geometry::Inclusion inc;
-  inc.shape = geometry::Polygon{{{0.25, 0.25}, {0.75, 0.25}, {0.75, 0.75}, {0.25, 0.75}}};
+  inc.shape = std::move(shape);
   inc.phase = 2;
   s.inclusions.push_back(inc);
   return s;
+}
+
+// [0,1]² with the square [0.25,0.75]² as phase 2 (a void when asked).
+geometry::SceneDesc square_scene(bool inclusion_is_void) {
+  return one_inclusion_scene(2, 1, geometry::Polygon{{{0.25, 0.25}, {0.75, 0.25}, {0.75, 0.75}, {0.25, 0.75}}},
+                             "square", inclusion_is_void);
 }
 
 bool in_square(const Vec2& p) { return p[0] > 0.25 && p[0] < 0.75 && p[1] > 0.25 && p[1] < 0.75; }
@@ -47,22 +57,19 @@ mesh::Mesh2 square_mesh() {
 }
 
 // Keeps the cells `keep` says yes to, drops the nodes no kept cell uses.
-template <class Keep>
-mesh::Mesh2 filtered(const mesh::Mesh2& m, Keep keep) {
-  mesh::Mesh2 out;
+template <int Dim, class Keep>
+mesh::SimplexMesh<Dim> filtered(const mesh::SimplexMesh<Dim>& m, Keep keep) {
+  mesh::SimplexMesh<Dim> out;
   std::vector<LocalId> new_id(m.node_count(), -1);
   for (std::size_t c = 0; c < m.cell_count(); ++c) {
     if (!keep(c)) continue;
-    std::array<LocalId, 3> t;
-    for (int k = 0; k < 3; ++k) {
+    std::array<LocalId, Dim + 1> t;
+    for (int k = 0; k <= Dim; ++k) {
       LocalId& n = new_id[m.cell(c)[k]];
-      if (n < 0) {
-        const Vec2 p = m.point(m.cell(c)[k]);
-        n = add_node(out, p[0], p[1]);
-      }
+      if (n < 0) n = add_node(out, m.point(m.cell(c)[k]));
       t[k] = n;
     }
-    add_cell<2>(out, t, m.cell_phase[c]);
+    add_cell<Dim>(out, t, m.cell_phase[c]);
   }
   return out;
 }
@@ -171,6 +178,109 @@ TEST(CertifyWithScene, SquareInclusionAndVoid) {
     const Certificate h = certify(holed, oracle, CertifyOptions{});
     EXPECT_FALSE(h.passed());
     EXPECT_FALSE(h.fidelity->ok);
+  }
+}
+
+// [0,6]³ of unit cubes with the cube [1,5]³ as phase 2 (a void when asked), given as a
+// closed surface of 12 outward triangles: the mesh conforms to it exactly.
+geometry::SceneDesc cube_scene(bool inclusion_is_void) {
+  auto corner = [](int i) { return Vec3{i & 1 ? 5.0 : 1.0, i & 2 ? 5.0 : 1.0, i & 4 ? 5.0 : 1.0}; };
+  const int quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  geometry::StlSurface surface;
+  surface.file = "cube.stl";
+  for (const auto& q : quads) {
+    surface.triangles.push_back({corner(q[0]), corner(q[1]), corner(q[2])});
+    surface.triangles.push_back({corner(q[0]), corner(q[2]), corner(q[3])});
+  }
+  return one_inclusion_scene(3, 6, surface, "cube", inclusion_is_void);
+}
+
+Vec3 centroid(const mesh::Mesh3& m, std::size_t c) {
+  Vec3 g{0, 0, 0};
+  for (int k = 0; k < 4; ++k)
+    for (int d = 0; d < 3; ++d) g[d] += m.point(m.cell(c)[k])[d] / 4;
+  return g;
+}
+
+bool in_cube(const Vec3& p) {
+  for (int d = 0; d < 3; ++d)
+    if (!(p[d] > 1 && p[d] < 5)) return false;
+  return true;
+}
+
+mesh::Mesh3 cube_mesh() {
+  mesh::Mesh3 m = structured_tets(6, 6, 6);
+  for (std::size_t c = 0; c < m.cell_count(); ++c) m.cell_phase[c] = in_cube(centroid(m, c)) ? 2 : 1;
+  return m;
+}
+
+TEST(Fidelity3, ConformingCubeInclusionPasses) {
+  const geometry::Oracle3 oracle(cube_scene(false));
+  const auto f = check_fidelity(cube_mesh(), oracle, 1e-9);
+  EXPECT_TRUE(f.ok);
+  EXPECT_TRUE(f.centroids_checked);
+  EXPECT_EQ(f.cells_off_phase, 0u);
+  EXPECT_EQ(f.max_centroid_ratio, 0.0);
+  EXPECT_EQ(f.max_deviation, 0.0);
+  ASSERT_EQ(f.phase_measure.size(), 2u);
+  EXPECT_NEAR(f.phase_measure[1], 64.0, 1e-12);
+  EXPECT_NEAR(f.exact_phase_measure[1], 64.0, 1e-12);
+  EXPECT_NEAR(f.phase_measure[0], 216.0 - 64.0, 1e-12);
+}
+
+TEST(Fidelity3, CellDeepInsideAnotherPhaseFails) {
+  const geometry::Oracle3 oracle(cube_scene(false));
+  mesh::Mesh3 m = cube_mesh();
+  std::size_t deep = m.cell_count();
+  for (std::size_t c = 0; c < m.cell_count() && deep == m.cell_count(); ++c) {
+    const Vec3 g = centroid(m, c);
+    if (g[0] > 2 && g[0] < 3 && g[1] > 2 && g[1] < 3 && g[2] > 2 && g[2] < 3) deep = c;
+  }
+  ASSERT_LT(deep, m.cell_count());
+  m.cell_phase[deep] = 1;  // matrix, 1.5 below the cube's surface
+  const auto f = check_fidelity(m, oracle, 1e-9);
+  EXPECT_FALSE(f.ok);
+  EXPECT_EQ(f.cells_wrong_phase, 1u);
+  EXPECT_EQ(f.cells_off_phase, 1u);
+  EXPECT_GT(f.max_centroid_ratio, kWrongPhaseRatio);
+  EXPECT_GT(f.nodes_off_phase + f.interface_nodes_off_interface, 0u);
+}
+
+TEST(Fidelity3, TwoDimensionalCheckHasNoCentroidCheck) {
+  const geometry::Oracle2 oracle(square_scene(false));
+  EXPECT_FALSE(check_fidelity(square_mesh(), oracle, 1e-9).centroids_checked);
+}
+
+TEST(CertifyWithScene, CubeInclusionAndVoid) {
+  {
+    const geometry::Oracle3 oracle(cube_scene(false));
+    const Certificate c = certify(cube_mesh(), oracle, CertifyOptions{});
+    EXPECT_TRUE(c.passed());
+    EXPECT_EQ(c.dimension, 3);
+    EXPECT_NEAR(c.conformity.expected_measure, 216.0, 1e-12);
+    const auto j = nlohmann::json::parse(certificate_json(c));
+    EXPECT_EQ(j["fidelity"]["ok"], true);
+    EXPECT_EQ(j["fidelity"]["cells_wrong_phase"], 0);
+    EXPECT_TRUE(j["fidelity"].contains("max_centroid_ratio"));
+    EXPECT_EQ(j["fidelity"]["phases"][1]["name"], "cube");
+    EXPECT_NE(certificate_summary(c).find("phase 2 (cube): volume 64"), std::string::npos);
+  }
+  {
+    const geometry::Oracle3 oracle(cube_scene(true));
+    const mesh::Mesh3 full = cube_mesh();
+    const mesh::Mesh3 m = filtered(full, [&](std::size_t c) { return full.cell_phase[c] == 1; });
+    const Certificate c = certify(m, oracle, CertifyOptions{});
+    EXPECT_TRUE(c.passed());
+    EXPECT_NEAR(c.conformity.expected_measure, 216.0 - 64.0, 1e-12);
+    EXPECT_EQ(c.conformity.inner_boundary_facets, 6u * 16u * 2u);
+    ASSERT_FALSE(c.notes.empty());
+    EXPECT_NE(c.notes.back().find("total volume checked to 0.05 only (void boundaries are polyhedral)"),
+              std::string::npos);
+    const mesh::Mesh3 holed = filtered(full, [&](std::size_t c) { return full.cell_phase[c] == 1 && c > 1; });
+    const Certificate h = certify(holed, oracle, CertifyOptions{});
+    EXPECT_FALSE(h.passed());
+    EXPECT_FALSE(h.fidelity->ok);
+    EXPECT_GT(h.fidelity->boundary_nodes_off_void, 0u);
   }
 }
 
