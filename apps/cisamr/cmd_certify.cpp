@@ -112,12 +112,16 @@ void add_certify_command(CLI::App& app, GlobalFlags& flags, int& exit_code) {
       for (const geometry::Phase& p : loaded.phases) c.phase_names.emplace_back(p.id, p.name);
     {
       ScopedPhase timer(&times, "write");
+      io::OutputSet outputs;  // both certificates or neither
       if (!args->json.empty()) write_text_file(args->json, quality::certificate_json(c));
       if (!args->html.empty()) write_text_file(args->html, quality::certificate_html(c));
+      outputs.commit();
     }
-    if (!flags.quiet) std::fputs(quality::certificate_summary(c).c_str(), stdout);
+    // A certificate on standard output is the data there: the summary moves to stderr.
+    FILE* summary = io::is_standard_output(args->json) || io::is_standard_output(args->html) ? stderr : stdout;
+    if (!flags.quiet) std::fputs(quality::certificate_summary(c).c_str(), summary);
     if (flags.verbose)
-      for (const auto& [name, seconds] : times.phases()) std::printf("  %-10s %8.3f s\n", name.c_str(), seconds);
+      for (const auto& [name, seconds] : times.phases()) std::fprintf(summary, "  %-10s %8.3f s\n", name.c_str(), seconds);
     exit_code = c.passed() ? 0 : 3;
   });
 }

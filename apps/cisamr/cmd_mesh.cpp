@@ -1,8 +1,6 @@
-// cisamr mesh SCENE -o OUT.{vtu,pvtu,msh,inp,mesh} [--partitions N] [--gather] [--report R.json]
-//             [--svg PICTURE.svg]
-// Without --partitions and outside mpiexec: the sequential mesher. With --partitions N, or
-// under mpiexec -n P: the parallel mesher (lib/parallel). Both through driver::mesh_scene;
-// every rank runs all of this, only rank 0 prints and writes the report.
+// cisamr mesh: parses the options, meshes through driver::mesh_scene (sequential, or the
+// parallel mesher with --partitions N or under mpiexec), writes, prints. Every rank runs all
+// of this; only rank 0 prints and writes the report.
 #include <algorithm>
 #include <cstdio>
 #include <memory>
@@ -19,29 +17,30 @@ namespace cisamr::app {
 namespace {
 
 struct MeshArgs {
-  std::string scene, output, report, svg;
+  std::string scene, output, report, svg, format;
   bool gather = false;
   bool fixed_ghost = false;  // the fixed 3-cell inclusion margin instead of the level-aware one
   driver::Options options;
 };
 
 template <int Dim>
-void print_summary(const driver::MeshRun<Dim>& run, const driver::Output& output, const GlobalFlags& flags) {
+void print_summary(std::FILE* out, const driver::MeshRun<Dim>& run, const driver::Output& output,
+                   const GlobalFlags& flags) {
   const pipeline::Counters<Dim>& counters = run.mesh.counters;
   if (!flags.quiet) {
-    std::printf("%s: %lld nodes, %lld %s, max aspect ratio %.3f (bound %.1f, %zu above), %.3f s", output.path.c_str(),
+    std::fprintf(out, "%s: %lld nodes, %lld %s, max aspect ratio %.3f (bound %.1f, %zu above), %.3f s", output.path.c_str(),
                 static_cast<long long>(run.mesh.piece.global_nodes), static_cast<long long>(run.mesh.global_cells),
                 Dim == 2 ? "triangles" : "tetrahedra", run.aspect.max, run.bound, run.aspect.above_bound,
                 run.total_seconds);
-    if (run.distributed) std::printf(", %d rank(s), %zu partitions", run.ranks, run.mesh.partitions.size());
-    std::printf("\n");
+    if (run.distributed) std::fprintf(out, ", %d rank(s), %zu partitions", run.ranks, run.mesh.partitions.size());
+    std::fprintf(out, "\n");
     if constexpr (Dim == 2) {
       if (counters.collapsed > 0)
-        std::printf("%lld quads held a feature below the local resolution (a tangency, a thin gap or a wedge "
+        std::fprintf(out, "%lld quads held a feature below the local resolution (a tangency, a thin gap or a wedge "
                     "sharper than the bound allows); collapsed with nodes at most %.3g from the phases they serve\n",
                     static_cast<long long>(counters.collapsed), counters.max_collapse_deviation);
     } else if (counters.collapsed_nodes + counters.collapsed_cut_points > 0) {
-      std::printf("%lld nodes could neither stay nor snap without a tetrahedron above the bound (a tangency, a "
+      std::fprintf(out, "%lld nodes could neither stay nor snap without a tetrahedron above the bound (a tangency, a "
                   "thin gap or a wedge at the domain boundary); collapsed onto the interface, at most %.3g from "
                   "the phases they serve\n",
                   static_cast<long long>(counters.collapsed_nodes), counters.max_collapse_deviation);
@@ -49,24 +48,24 @@ void print_summary(const driver::MeshRun<Dim>& run, const driver::Output& output
   }
   if (flags.verbose) {
     if (run.distributed)
-      std::printf("  %-10s %9s %9s %9s   (seconds over %d rank(s))\n", "phase", "min", "max", "mean", run.ranks);
+      std::fprintf(out, "  %-10s %9s %9s %9s   (seconds over %d rank(s))\n", "phase", "min", "max", "mean", run.ranks);
     for (const auto& s : run.timings)
       if (run.distributed)
-        std::printf("  %-10s %9.3f %9.3f %9.3f\n", s.name.c_str(), s.min, s.max, s.mean);
+        std::fprintf(out, "  %-10s %9.3f %9.3f %9.3f\n", s.name.c_str(), s.min, s.max, s.mean);
       else
-        std::printf("  %-10s %8.3f s\n", s.name.c_str(), s.max);
+        std::fprintf(out, "  %-10s %8.3f s\n", s.name.c_str(), s.max);
     if (run.distributed) {
       double max_load = 0, sum_load = 0;
       for (const auto& p : run.mesh.partitions) max_load = std::max(max_load, p.load), sum_load += p.load;
       const double mean_load = sum_load / static_cast<double>(run.mesh.partitions.size());
-      std::printf("  partition loads: max %.4g, mean %.4g, imbalance %.3f (%s)\n", max_load, mean_load,
+      std::fprintf(out, "  partition loads: max %.4g, mean %.4g, imbalance %.3f (%s)\n", max_load, mean_load,
                   mean_load > 0 ? max_load / mean_load : 1.0, run.mesh.partition_method.c_str());
       for (const auto& p : run.mesh.partitions) {
-        std::printf("  part %3d rank %2d cells ", p.id, p.rank);
+        std::fprintf(out, "  part %3d rank %2d cells ", p.id, p.rank);
         for (int d = 0; d < Dim; ++d)
-          std::printf("%s[%lld,%lld)", d ? "x" : "", static_cast<long long>(p.lattice_min[d]),
+          std::fprintf(out, "%s[%lld,%lld)", d ? "x" : "", static_cast<long long>(p.lattice_min[d]),
                       static_cast<long long>(p.lattice_max[d]));
-        std::printf(" load %10.4g elements %9lld ghost %3d inclusions %6lld kernel %.3f s\n", p.load,
+        std::fprintf(out, " load %10.4g elements %9lld ghost %3d inclusions %6lld kernel %.3f s\n", p.load,
                     static_cast<long long>(p.elements), p.ghost, static_cast<long long>(p.inclusions), p.kernel_seconds);
       }
     }
@@ -83,20 +82,22 @@ void run_mesh(MeshArgs& args, const GlobalFlags& flags, int& exit_code) {
   options.figures = !args.report.empty();
   if (show_progress(flags)) options.progress = [](const std::string& what) { std::fprintf(stderr, "cisamr: %s\n", what.c_str()); };
   // Fail on a bad output name before any work.
-  const driver::Output output = driver::plan_output(comm, args.output, args.gather, driver::is_distributed(comm, options));
+  const driver::Output output =
+      driver::plan_output(comm, args.output, args.gather, driver::is_distributed(comm, options), args.format);
   auto meshed = driver::mesh_scene(comm, args.scene, options);
   std::visit(
       [&](auto& run) {
+        io::OutputSet outputs;  // the mesh, its pieces, the picture and the report, or none of them
         driver::write_outputs(comm, run, output, args.svg);
         driver::finish(comm, run);
         if (!args.report.empty())
           parallel::run_collectively(comm, [&] {
-            if (comm.rank() != 0) return;
-            io::AtomicFile file(args.report);
-            file.write(driver::report(run, args.scene, output));
-            file.commit();
+            if (comm.rank() == 0) write_text_file(args.report, driver::report(run, args.scene, output));
           });
-        if (comm.rank() == 0) print_summary(run, output, flags);
+        parallel::run_collectively(comm, [&] { outputs.commit(); });
+        // Data on standard output: the summary goes to stderr.
+        const bool data_on_stdout = io::is_standard_output(args.report) || io::is_standard_output(output.path);
+        if (comm.rank() == 0) print_summary(data_on_stdout ? stderr : stdout, run, output, flags);
         exit_code = run.aspect.above_bound > 0 ? 3 : 0;
       },
       meshed);
@@ -114,6 +115,8 @@ void add_mesh_command(CLI::App& app, GlobalFlags& flags, int& exit_code) {
                   "Output mesh: .vtu, .msh (Gmsh 4.1), .inp (Abaqus) or .mesh (Medit); in parallel also .pvtu "
                   "(one .vtu piece per rank)")
       ->required();
+  cmd->add_option("--format", args->format, "Mesh format when -o does not name one (-o - writes standard output)")
+      ->check(CLI::IsMember({"vtu", "msh", "inp", "mesh"}));
   cmd->add_option("--report", args->report, "Write a JSON report (counts, per-phase measure, aspect ratios, timings)");
   cmd->add_option("--svg", args->svg, "Write a picture of the 2D mesh coloured by phase");
   cmd->add_option("--alpha", knobs.alpha, "r-adaptivity snap threshold, fraction of the edge length")

@@ -132,16 +132,18 @@ std::variant<MeshRun<2>, MeshRun<3>> mesh_scene(const Comm& comm, const std::str
   return mesh(MeshRun<2>{});
 }
 
-Output plan_output(const Comm& comm, const std::string& requested, bool gather, bool distributed) {
+Output plan_output(const Comm& comm, const std::string& requested, bool gather, bool distributed,
+                   const std::string& format) {
   namespace fs = std::filesystem;
-  const std::string extension = fs::path(requested).extension().string();
+  const std::string extension = format.empty() ? fs::path(requested).extension().string() : "." + format;
   Output out;
   out.pieces = distributed && (extension == ".pvtu" || (extension == ".vtu" && comm.size() > 1 && !gather));
   out.path = out.pieces ? fs::path(requested).replace_extension(".pvtu").string() : requested;
   parallel::run_collectively(comm, [&] {
     if (out.pieces && gather)
       throw InputError(requested, "", "--gather writes one file: use .vtu, .msh, .inp or .mesh");
-    if (!out.pieces) io::mesh_format_of(out.path);
+    if (!out.pieces && !format.empty()) out.format = io::mesh_format_of("mesh." + format);
+    if (!out.pieces && format.empty()) io::mesh_format_of(out.path);
     if (!out.pieces && comm.size() > 1 && !gather)
       throw InputError(requested, "", "a parallel run writes .pvtu pieces; add --gather to write one " + extension +
                                           " file on rank 0");
@@ -164,7 +166,7 @@ void write_outputs(const Comm& comm, MeshRun<Dim>& run, const Output& output, co
   if (output.pieces)
     parallel::write_pvtu<Dim>(comm, output.path, piece.mesh);
   else
-    parallel::write_gathered<Dim>(comm, output.path, gathered, run.mesh.phases);
+    parallel::write_gathered<Dim>(comm, output.path, gathered, run.mesh.phases, {.format = output.format});
   if constexpr (Dim == 2)
     if (picture)
       parallel::run_collectively(comm, [&] {

@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
 #include <variant>
 #include <vector>
@@ -69,14 +70,17 @@ std::variant<MeshRun<2>, MeshRun<3>> mesh_scene(const Comm& comm, const std::str
 // Where the mesh goes: one file (on rank 0 when distributed), or a .pvtu listing one .vtu
 // piece per rank (a .pvtu name, or .vtu on several ranks without `gather`).
 struct Output {
-  std::string path;
+  std::string path;  // "-": standard output (one file, `format` named)
+  std::optional<io::MeshFormat> format;  // when the path's extension does not name it
   bool pieces = false;
   std::vector<std::string> piece_paths;
 };
 
 // Checks the requested output before any work (format; pieces or one gathered file).
-// Throws InputError on every rank.
-Output plan_output(const Comm& comm, const std::string& requested, bool gather, bool distributed);
+// `format` ("vtu", "msh", "inp", "mesh"; empty: from the extension) names the format of a
+// path without one, such as "-". Throws InputError on every rank.
+Output plan_output(const Comm& comm, const std::string& requested, bool gather, bool distributed,
+                   const std::string& format = "");
 
 // Writes the mesh where `output` says and, in 2D with `svg` given, a picture of it (timed
 // as "write").

@@ -1,9 +1,6 @@
 #include "parallel/output.hpp"
 
-#include <cerrno>
-#include <cstring>
 #include <filesystem>
-#include <unistd.h>
 
 #include "core/error.hpp"
 #include "io/atomic_file.hpp"
@@ -40,58 +37,41 @@ std::string pvtu_text(const std::string& pvtu_path, int ranks) {
   return xml;
 }
 
-void remove_quietly(const std::string& path) {
-  std::error_code ec;
-  fs::remove(path, ec);
-}
-
 }  // namespace
 
 template <int Dim>
 void write_pvtu(const Comm& comm, const std::string& pvtu_path, const mesh::SimplexMesh<Dim>& piece) {
-  const std::string final_path = piece_path(pvtu_path, comm.rank());
-  const fs::path fp(final_path);
-  const std::string temporary =
-      (fp.parent_path() / ("." + fp.filename().string() + ".part." + std::to_string(::getpid()))).string();
-  bool renamed = false;
-  try {
-    run_collectively(comm, [&] {
-      if (fs::path(pvtu_path).extension() != ".pvtu")
-        throw InputError(pvtu_path, "", "a parallel output must end in .pvtu");
-      io::write_vtu(temporary, piece);
-    });
-    run_collectively(comm, [&] {
-      if (::rename(temporary.c_str(), final_path.c_str()) != 0)
-        throw InputError(final_path, "", std::string("cannot write: ") + std::strerror(errno));
-      renamed = true;
-    });
-    run_collectively(comm, [&] {
-      if (comm.rank() != 0) return;
-      io::AtomicFile file(pvtu_path);
-      file.write(pvtu_text(pvtu_path, comm.size()));
-      file.commit();
-    });
-  } catch (...) {
-    remove_quietly(temporary);
-    if (renamed) remove_quietly(final_path);
-    throw;
-  }
+  // Joins the caller's io::OutputSet when one is open; otherwise the pieces and the .pvtu
+  // are renamed into place together once every rank has written.
+  io::OutputSet outputs;
+  run_collectively(comm, [&] {
+    if (fs::path(pvtu_path).extension() != ".pvtu")
+      throw InputError(pvtu_path, "", "a parallel output must end in .pvtu");
+    io::write_vtu(piece_path(pvtu_path, comm.rank()), piece);
+  });
+  run_collectively(comm, [&] {
+    if (comm.rank() != 0) return;
+    io::AtomicFile file(pvtu_path);
+    file.write(pvtu_text(pvtu_path, comm.size()));
+    file.commit();
+  });
+  run_collectively(comm, [&] { outputs.commit(); });
 }
 
 template <int Dim>
 void write_gathered(const Comm& comm, const std::string& path, const mesh::SimplexMesh<Dim>& gathered,
-                    const std::vector<geometry::Phase>& phases, int root) {
+                    const std::vector<geometry::Phase>& phases, const io::MeshWriteOptions& options, int root) {
   run_collectively(comm, [&] {
-    if (comm.rank() == root) io::write_mesh(path, gathered, phases);
+    if (comm.rank() == root) io::write_mesh(path, gathered, phases, options);
   });
 }
 
 template void write_pvtu<2>(const Comm&, const std::string&, const mesh::SimplexMesh<2>&);
 template void write_pvtu<3>(const Comm&, const std::string&, const mesh::SimplexMesh<3>&);
 template void write_gathered<2>(const Comm&, const std::string&, const mesh::SimplexMesh<2>&,
-                                const std::vector<geometry::Phase>&, int);
+                                const std::vector<geometry::Phase>&, const io::MeshWriteOptions&, int);
 template void write_gathered<3>(const Comm&, const std::string&, const mesh::SimplexMesh<3>&,
-                                const std::vector<geometry::Phase>&, int);
+                                const std::vector<geometry::Phase>&, const io::MeshWriteOptions&, int);
 
 std::vector<PhaseSpread> spread_over_ranks(const Comm& comm, const PhaseTimes& times,
                                            const std::vector<std::string>& names) {

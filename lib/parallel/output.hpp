@@ -8,6 +8,7 @@
 #include "core/comm.hpp"
 #include "core/timer.hpp"
 #include "geometry/scene.hpp"
+#include "io/mesh_io.hpp"
 #include "mesh/simplex_mesh.hpp"
 #include "quality/quality.hpp"
 
@@ -16,24 +17,22 @@ namespace cisamr::parallel {
 // "DIR/NAME.pvtu" → "DIR/NAME_<rank>.vtu".
 std::string piece_path(const std::string& pvtu_path, int rank);
 
-// Collective. Each rank writes its piece under a temporary name; once every rank has, the
-// pieces are renamed into place; once every rank has, rank 0 writes the .pvtu (through
-// io::AtomicFile). A failure anywhere removes what this call wrote on every rank and is
-// thrown on every rank (collective.hpp).
+// Collective. Each rank writes its piece and rank 0 the .pvtu, all through io::AtomicFile
+// inside an io::OutputSet: once every rank has written, every rank renames its files into
+// place (inside a caller's open OutputSet, the caller's commit does). A failure anywhere
+// deletes what this call wrote on every rank and is thrown on every rank (collective.hpp).
 template <int Dim>
 void write_pvtu(const Comm& comm, const std::string& pvtu_path, const mesh::SimplexMesh<Dim>& piece);
 inline void write_pvtu2(const Comm& comm, const std::string& pvtu_path, const mesh::Mesh2& piece) {
   write_pvtu<2>(comm, pvtu_path, piece);
 }
 
-// Collective. Rank `root` writes `gathered` (any format io::write_mesh knows).
+// Collective. Rank `root` writes `gathered` (any format io::write_mesh knows; `options`
+// may name it, for a path without an extension such as "-").
 template <int Dim>
 void write_gathered(const Comm& comm, const std::string& path, const mesh::SimplexMesh<Dim>& gathered,
-                    const std::vector<geometry::Phase>& phases, int root = 0);
-inline void write_gathered2(const Comm& comm, const std::string& path, const mesh::Mesh2& gathered,
-                            const std::vector<geometry::Phase>& phases, int root = 0) {
-  write_gathered<2>(comm, path, gathered, phases, root);
-}
+                    const std::vector<geometry::Phase>& phases, const io::MeshWriteOptions& options = {},
+                    int root = 0);
 
 struct PhaseSpread {
   std::string name;
