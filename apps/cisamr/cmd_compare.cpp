@@ -10,7 +10,9 @@
 #include "core/error.hpp"
 #include "io/atomic_file.hpp"
 #include "io/scene_io.hpp"
-#include "tetgen_ref/compare3.hpp"
+#ifdef CISAMR_WITH_TETGEN
+#include "compare/compare3.hpp"
+#endif
 
 namespace cisamr::app {
 namespace {
@@ -25,11 +27,13 @@ struct CompareArgs {
   bool no_conformity = false;
 };
 
+#ifdef CISAMR_WITH_TETGEN
 void write_text(const std::string& path, const std::string& text) {
   io::AtomicFile file(path);
   file.write(text);
   file.commit();
 }
+#endif
 
 }  // namespace
 
@@ -53,11 +57,14 @@ void add_compare_command(CLI::App& app, GlobalFlags& flags, int& exit_code) {
                 "Run both meshers in this process (default: each in a child process, for clean memory figures)");
   cmd->add_flag("--no-conformity", args->no_conformity, "Skip the conformity check of both meshes");
   cmd->callback([args, &flags, &exit_code] {
+#ifndef CISAMR_WITH_TETGEN
+    throw InputError("--tetgen", "", "this cisamr was built without TetGen (configure with -DCISAMR_WITH_TETGEN=ON)");
+#else
     const geometry::SceneDesc scene = io::read_scene(args->scene);
     if (scene.dimension != 3)
       throw InputError(args->scene, "dimension",
                        "cisamr compare is 3D only (this scene is " + std::to_string(scene.dimension) + "D)");
-    tetgen_ref::CompareOptions options;
+    compare::CompareOptions options;
     options.tetgen.max_volume = args->max_volume;
     options.tetgen.radius_edge_ratio = args->quality;
     options.tetgen.surface_edge = args->surface_edge;
@@ -65,11 +72,12 @@ void add_compare_command(CLI::App& app, GlobalFlags& flags, int& exit_code) {
     options.check_conformity = !args->no_conformity;
     if (show_progress(flags))
       options.progress = [](const std::string& what) { std::fprintf(stderr, "cisamr: %s\n", what.c_str()); };
-    const tetgen_ref::Comparison c = tetgen_ref::compare3(scene, options);
-    if (!args->json.empty()) write_text(args->json, tetgen_ref::comparison_json(c));
-    if (!args->html.empty()) write_text(args->html, tetgen_ref::comparison_html(c));
-    if (!flags.quiet) std::fputs(tetgen_ref::comparison_table(c).c_str(), stdout);
+    const compare::Comparison c = compare::compare3(scene, options);
+    if (!args->json.empty()) write_text(args->json, compare::comparison_json(c));
+    if (!args->html.empty()) write_text(args->html, compare::comparison_html(c));
+    if (!flags.quiet) std::fputs(compare::comparison_table(c).c_str(), stdout);
     exit_code = 0;
+#endif
   });
 }
 
