@@ -29,6 +29,12 @@
 
 namespace cisamr::radapt {
 
+// Reach, in cells of the level of the leaves around a node (R4 gives them one level): a
+// node takes its first option no leaf refused, so it depends on the leaves around it (1),
+// their vertices' options and pass-1 refusals (2), and those leaves' vertices' first
+// options (3). Final positions and masks of a node read leaves up to 3 cells away.
+inline constexpr int kReachCells3 = 3;
+
 struct Options3 {
   double alpha = 0.5;           // snap reach along axis edges, fraction of the edge length
   double alpha_diagonal = 0.2;  // along face diagonals (0: axis edges only, as in the paper)
