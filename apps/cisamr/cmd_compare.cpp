@@ -1,7 +1,8 @@
 // cisamr compare SCENE --tetgen [--html R.html] [--json R.json]
-// Meshes a 3D scene with our mesher and with TetGen 1.5 (validation/tetgen_ref) and prints
-// both side by side: tetrahedra, time, memory, volume errors, aspect-ratio distribution.
-// The same code as validation/bench/bench_mesh3. 2D scenes: exit 2 (3D only).
+// Meshes a 3D scene with our mesher and with TetGen 1.5 (lib/compare) and prints both
+// side by side: tetrahedra, time, memory, volume errors, aspect-ratio distribution.
+// The same code as validation/bench/bench_mesh3. 2D scenes: exit 2 (3D only). A binary
+// built without TetGen (CISAMR_WITH_TETGEN=OFF) accepts the same options and exits 2.
 #include <cstdio>
 #include <memory>
 #include <string>

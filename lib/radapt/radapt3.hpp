@@ -1,5 +1,5 @@
 #pragma once
-// r-adaptivity in 3D with a quality guard (lib/radapt/README3.md).
+// r-adaptivity in 3D with a quality guard (lib/radapt/README.md, 3D part).
 //
 // Every node of a cut leaf gets an ordered list of options, decided from original positions
 // only: snap onto the nearest interface crossings along its leaf edges (axis edges within
