@@ -1,7 +1,8 @@
 // cisamr compare SCENE --tetgen [--html R.html] [--json R.json]
-// Meshes a 3D scene with our mesher and with TetGen 1.5 (validation/tetgen_ref) and prints
-// both side by side: tetrahedra, time, memory, volume errors, aspect-ratio distribution.
-// The same code as validation/bench/bench_mesh3. 2D scenes: exit 2 (3D only).
+// Meshes a 3D scene with our mesher and with TetGen 1.5 (lib/compare) and prints both
+// side by side: tetrahedra, time, memory, volume errors, aspect-ratio distribution.
+// The same code as validation/bench/bench_mesh3. 2D scenes: exit 2 (3D only). A binary
+// built without TetGen (CISAMR_WITH_TETGEN=OFF) accepts the same options and exits 2.
 #include <cstdio>
 #include <memory>
 #include <string>
@@ -9,7 +10,9 @@
 #include "commands.hpp"
 #include "core/error.hpp"
 #include "io/scene_io.hpp"
-#include "tetgen_ref/compare3.hpp"
+#ifdef CISAMR_WITH_TETGEN
+#include "compare/compare3.hpp"
+#endif
 
 namespace cisamr::app {
 namespace {
@@ -46,11 +49,14 @@ void add_compare_command(CLI::App& app, GlobalFlags& flags, int& exit_code) {
                 "Run both meshers in this process (default: each in a child process, for clean memory figures)");
   cmd->add_flag("--no-conformity", args->no_conformity, "Skip the conformity check of both meshes");
   cmd->callback([args, &flags, &exit_code] {
+#ifndef CISAMR_WITH_TETGEN
+    throw InputError("--tetgen", "", "this cisamr was built without TetGen (configure with -DCISAMR_WITH_TETGEN=ON)");
+#else
     const geometry::SceneDesc scene = io::read_scene(args->scene);
     if (scene.dimension != 3)
       throw InputError(args->scene, "dimension",
                        "cisamr compare is 3D only (this scene is " + std::to_string(scene.dimension) + "D)");
-    tetgen_ref::CompareOptions options;
+    compare::CompareOptions options;
     options.tetgen.max_volume = args->max_volume;
     options.tetgen.radius_edge_ratio = args->quality;
     options.tetgen.surface_edge = args->surface_edge;
@@ -58,11 +64,12 @@ void add_compare_command(CLI::App& app, GlobalFlags& flags, int& exit_code) {
     options.check_conformity = !args->no_conformity;
     if (show_progress(flags))
       options.progress = [](const std::string& what) { std::fprintf(stderr, "cisamr: %s\n", what.c_str()); };
-    const tetgen_ref::Comparison c = tetgen_ref::compare3(scene, options);
-    if (!args->json.empty()) write_text_file(args->json, tetgen_ref::comparison_json(c));
-    if (!args->html.empty()) write_text_file(args->html, tetgen_ref::comparison_html(c));
-    if (!flags.quiet) std::fputs(tetgen_ref::comparison_table(c).c_str(), stdout);
+    const compare::Comparison c = compare::compare3(scene, options);
+    if (!args->json.empty()) write_text_file(args->json, compare::comparison_json(c));
+    if (!args->html.empty()) write_text_file(args->html, compare::comparison_html(c));
+    if (!flags.quiet) std::fputs(compare::comparison_table(c).c_str(), stdout);
     exit_code = 0;
+#endif
   });
 }
 

@@ -34,4 +34,11 @@ class MeshingError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// A broken internal invariant: a bug, not bad input. Thrown by the checks of core/check.hpp
+// with the file and line; the app reports it as an internal error (exit code 1).
+class InternalError : public std::logic_error {
+ public:
+  using std::logic_error::logic_error;
+};
+
 }  // namespace cisamr

@@ -28,6 +28,12 @@
 
 namespace cisamr::faceswap {
 
+// Reach, in cells of the level of the swapped cubes: a swap of cubes (C, D) must beat every
+// candidate sharing C or D; a competitor (D, Y) has Y up to 2 cells from C, and its value
+// reads the final positions and masks of Y's corners, each radapt::kReachCells3 deep.
+inline constexpr int kCompetitorCells3 = 2;
+inline constexpr int kReachCells3 = kCompetitorCells3 + radapt::kReachCells3;
+
 struct Options3 {
   double trigger = 3.0;  // corner tets above this aspect ratio look for a swap (0: no swapping)
 };

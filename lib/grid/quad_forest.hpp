@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/check.hpp"
 #include "grid/lattice.hpp"
 
 namespace cisamr::grid {
@@ -24,7 +25,10 @@ class QuadForest {
   const Lattice2& lattice() const { return lattice_; }
   const CellRange<2>& range() const { return range_; }
   std::size_t size() const { return cells_.size(); }
-  const Cell& cell(std::int32_t c) const { return cells_[static_cast<std::size_t>(c)]; }
+  const Cell& cell(std::int32_t c) const {
+    CISAMR_DEBUG_CHECK(c >= 0 && static_cast<std::size_t>(c) < cells_.size(), "QuadForest: cell index out of range");
+    return cells_[static_cast<std::size_t>(c)];
+  }
   bool is_leaf(std::int32_t c) const { return cells_[static_cast<std::size_t>(c)].first_child < 0; }
   std::int32_t root_count() const { return root_count_; }
   // Root of global coarse cell (ci, cj), or -1 outside the range.

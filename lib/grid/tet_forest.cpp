@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "core/check.hpp"
 #include "core/error.hpp"
 
 namespace cisamr::grid {
@@ -184,7 +185,7 @@ void TetForest::leaves_with_vertex(std::int32_t t, const LatticePoint3& p, std::
 
 std::int32_t TetForest::refine(std::int32_t t) {
   const Tet parent = tets_[static_cast<std::size_t>(t)];
-  if (parent.first_child >= 0) throw MeshingError("refining a tet that is not a leaf");
+  CISAMR_CHECK(parent.first_child < 0, "refining a tet that is not a leaf");
   if (parent.level >= lattice_.max_level) throw MeshingError("refinement beyond the finest level");
   const int n = tet::child_count(kind_of_local(parent.local));
   if (tets_.size() + static_cast<std::size_t>(n) > 2147483647u) throw MeshingError("tet forest exceeds 2^31 tets");

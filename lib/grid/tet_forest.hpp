@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/check.hpp"
 #include "grid/tet_lattice.hpp"
 
 namespace cisamr::grid {
@@ -31,7 +32,10 @@ class TetForest {
   const Lattice3& lattice() const { return lattice_; }
   const CellRange<3>& range() const { return range_; }
   std::size_t size() const { return tets_.size(); }
-  const Tet& tet(std::int32_t t) const { return tets_[static_cast<std::size_t>(t)]; }
+  const Tet& tet(std::int32_t t) const {
+    CISAMR_DEBUG_CHECK(t >= 0 && static_cast<std::size_t>(t) < tets_.size(), "TetForest: tet index out of range");
+    return tets_[static_cast<std::size_t>(t)];
+  }
   bool is_leaf(std::int32_t t) const { return tets_[static_cast<std::size_t>(t)].first_child < 0; }
   tet::Kind kind(std::int32_t t) const { return kind_of_local(tet(t).local); }
   int child_count(std::int32_t t) const { return tet::child_count(kind(t)); }

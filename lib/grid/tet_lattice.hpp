@@ -1,5 +1,5 @@
 #pragma once
-// The 3D lattice and its tetrahedral honeycomb (lib/grid/README3.md).
+// The 3D lattice and its tetrahedral honeycomb (lib/grid/README.md, 3D part).
 //
 // Nodes have integer coordinates (X, Y, Z) on the finest lattice of the whole domain,
 // (2^Lmax / h)·(x − x_min) (DESIGN.md §4). The key packs them in 64 bits, 21 bits per

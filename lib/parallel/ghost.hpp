@@ -3,43 +3,48 @@
 // must see so that every decision inside its box equals the whole-domain run's
 // (DESIGN.md §8). One template for 2D and 3D; see README.md for the derivation of the
 // margins.
+#include <algorithm>
 #include <cstdint>
 #include <span>
 #include <vector>
 
 #include "core/types.hpp"
+#include "faceswap/faceswap3.hpp"
 #include "geometry/scene.hpp"
 #include "grid/lattice.hpp"
 #include "pipeline/effective_levels.hpp"
 #include "pipeline/pipeline.hpp"
+#include "radapt/radapt2.hpp"
+#include "radapt/radapt3.hpp"
+#include "samr/samr2.hpp"
+#include "samr/samr3.hpp"
+#include "subdivide/subdivide2.hpp"
+#include "subdivide/subdivide3.hpp"
 
 namespace cisamr::parallel {
 
-// Coarse cells around a partition box that its kernel also meshes, by default, in 2D: its
-// cells look one cell (r-adaptivity, hanging nodes) or two cells (rule R4 at level 0)
-// beyond it, and a 2:1 cascade reaches < h: the tests pass with 2, fail with 0. 4 is twice
-// what they need.
-inline constexpr double kDefaultGhostCells = 4;
+// The ghost widths derive from the reach each stage declares in its header: how far beyond
+// a cell the decisions about it look (README.md, "Ghost region").
+
+// 2D: the widest reach of the 2D stages, in cells of the deciding level (R4's buffer, 2).
+inline constexpr int kKernelReach2 =
+    std::max({samr::kReachCells2, radapt::kReachCells2, subdivide::kReachCells2});
+// Twice the reach: the partition tests pass with the reach itself, fail with 0.
+inline constexpr int kGhostFactor2 = 2;
+// Coarse cells around a partition box that its kernel also meshes, by default, in 2D (4),
+// and, in cells of an inclusion's own level, the margin around its bounding box (rule
+// level_aware, 4·h_R).
+inline constexpr double kDefaultGhostCells = kGhostFactor2 * kKernelReach2;
 
 // 3D (README.md, "Ghost region (3D)"): how far a decision about a cell of the box can look
 // beyond the box's face, on data the partition must hold exactly as the whole-domain run
-// holds it.
-//  - SAMR: a refinement that an inclusion outside the region starts (or, missing there,
-//    does not start) travels through touching leaves, by rule B one level coarser per
-//    step, by rule R4 only along the one-cell band of an interface at one level (which the
-//    effective levels keep from carrying a level along an interface): less than
-//    h_{L-1} + Σ_{l<L-1} h_l < 2h, however many sweeps there are.
-//  - the snapping guard (two passes): a node's option depends on the pass-2 refusals of
-//    the leaves around it, which read their vertices' options and pass-1 refusals, which
-//    read the first options of the vertices around those, which read the cut leaves
-//    around them: 3 cells of the level l of the leaves concerned.
-//  - face swapping: a swap of cubes (C, D) must beat every candidate sharing C or D; such
-//    a candidate's value reads the final nodes of cubes up to 2 cells from C: 2 + 3 = 5
-//    cells of level l.
-//  - subdivision: cut points keyed by edges, from their ends' final positions (3 cells).
-inline constexpr double kSamrReach3 = 2;    // coarse cubes
-inline constexpr double kKernelReach3 = 5;  // cells of the level of the leaves that decide
-inline constexpr int kGhostSafety3 = 1;     // coarse cubes on top of the bound
+// holds it: the SAMR forest is right 2 coarse cubes inside the region
+// (samr::kReachCoarseCells3), and on top of it the snapping guard (3), face swapping (5)
+// and subdivision (3) read cells of the level of the leaves that decide.
+inline constexpr double kSamrReach3 = samr::kReachCoarseCells3;  // coarse cubes
+inline constexpr double kKernelReach3 =                          // cells of the deciding level
+    std::max({radapt::kReachCells3, faceswap::kReachCells3, subdivide::kReachCells3});
+inline constexpr int kGhostSafety3 = 1;  // coarse cubes on top of the bound
 
 // Coarse cubes of ghost a 3D box needs when the coarsest effective level among the
 // inclusions near it is `level`: ⌈kSamrReach3 + kKernelReach3 / 2^level⌉ + kGhostSafety3
@@ -47,9 +52,9 @@ inline constexpr int kGhostSafety3 = 1;     // coarse cubes on top of the bound
 int ghost_margin3(int level);
 
 struct GhostRule {
-  // 2D: margin around every inclusion's bounding box. Level-aware (default): 4·h_R,
-  // h_R = h/2^R, R the inclusion's SAMR levels; two inclusions whose inflated boxes do not
-  // meet cannot change each other's refinement. Fixed: `fixed_cells`·h for every inclusion.
+  // 2D: margin around every inclusion's bounding box. Level-aware (default):
+  // kDefaultGhostCells·h_R = 4·h_R, h_R = h/2^R, R the inclusion's SAMR levels; two
+  // inclusions whose inflated boxes do not meet cannot change each other's refinement. Fixed: `fixed_cells`·h for every inclusion.
   // (3D inflates by kBoxSlack3 only.)
   bool level_aware = true;
   double fixed_cells = 3;

@@ -15,6 +15,10 @@
 
 namespace cisamr::radapt {
 
+// Reach, in cells of the level of the cells around a node: a node's decision reads the
+// crossings on its four axis edges, i.e. the cells around it (1 cell).
+inline constexpr int kReachCells2 = 1;
+
 struct Options {
   double alpha = 0.5;  // snap threshold, fraction of the edge length
 };

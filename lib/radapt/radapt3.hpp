@@ -1,5 +1,5 @@
 #pragma once
-// r-adaptivity in 3D with a quality guard (lib/radapt/README3.md).
+// r-adaptivity in 3D with a quality guard (lib/radapt/README.md, 3D part).
 //
 // Every node of a cut leaf gets an ordered list of options, decided from original positions
 // only: snap onto the nearest interface crossings along its leaf edges (axis edges within
@@ -28,6 +28,12 @@
 #include "samr/samr3.hpp"
 
 namespace cisamr::radapt {
+
+// Reach, in cells of the level of the leaves around a node (R4 gives them one level): a
+// node takes its first option no leaf refused, so it depends on the leaves around it (1),
+// their vertices' options and pass-1 refusals (2), and those leaves' vertices' first
+// options (3). Final positions and masks of a node read leaves up to 3 cells away.
+inline constexpr int kReachCells3 = 3;
 
 struct Options3 {
   double alpha = 0.5;           // snap reach along axis edges, fraction of the edge length

@@ -18,6 +18,13 @@
 
 namespace cisamr::samr {
 
+// Reach: how far beyond a cell the rules' decisions about it look, in cells of the cell's
+// level. R4's buffer refines the cells sharing a vertex with a cut cell and their edge
+// neighbours (2 cells); an R3 cascade travels less than one coarse cell. With the levels of
+// pipeline::effective_levels2 passed in, no rule carries a level from one inclusion to
+// another, so this bounds what a partition's ghost must hold (lib/parallel/ghost.hpp).
+inline constexpr int kReachCells2 = 2;
+
 struct RefinedGrid2 {
   grid::QuadForest forest;
   // Per root: inclusions whose bounding box meets the closed root box (CSR).

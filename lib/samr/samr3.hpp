@@ -25,6 +25,14 @@
 
 namespace cisamr::samr {
 
+// Reach, in coarse cells: how far a difference in the refinement (one an inclusion outside
+// a region starts, or, missing there, does not start) can travel into the region. Rule B
+// moves it by one leaf one level coarser per step, R4 only along the one-cell band around
+// cut leaves of one level (the effective levels keep it from reaching another interface's
+// band), so from level-L cut leaves h_{L-1} + h_{L-2} + ... + h_0 < 2 coarse cells,
+// whatever the number of sweeps (lib/parallel/README.md, "Ghost region (3D)").
+inline constexpr int kReachCoarseCells3 = 2;
+
 struct RefinedGrid3 {
   grid::TetForest forest;
   // Per coarse cube of the range (x fastest): inclusions whose bounding box meets the

@@ -4,6 +4,7 @@
 #include <bit>
 #include <limits>
 
+#include "core/check.hpp"
 #include "core/error.hpp"
 #include "mesh/metrics.hpp"
 #include "subdivide/templates2.hpp"
@@ -69,7 +70,7 @@ class Subdivider {
 
   std::int32_t node(std::int64_t x, std::int64_t y) const {
     const std::int32_t id = nodes_.id(grid::key2(x, y));
-    if (id < 0) throw std::logic_error("subdivide2: missing lattice node");
+    CISAMR_CHECK(id >= 0, "subdivide2: missing lattice node");
     return id;
   }
   std::int32_t add_point(const Vec2& p) {
@@ -121,10 +122,9 @@ class Subdivider {
     ++out_.hanging_cells;
     const PhaseMask common = q.m[0] & q.m[1] & q.m[2] & q.m[3];
     for (int k = 0; k < 4; ++k)
-      if (nodes_.snapped[static_cast<std::size_t>(q.id[k])])
-        throw std::logic_error("subdivide2: a cell with hanging nodes has a moved corner (rule R4 broken)");
-    if (std::popcount(common) != 1)
-      throw std::logic_error("subdivide2: a cell with hanging nodes is cut (rule R4 broken)");
+      CISAMR_CHECK(!nodes_.snapped[static_cast<std::size_t>(q.id[k])],
+                   "subdivide2: a cell with hanging nodes has a moved corner (rule R4 broken)");
+    CISAMR_CHECK(std::popcount(common) == 1, "subdivide2: a cell with hanging nodes is cut (rule R4 broken)");
     const int phase = std::countr_zero(common);
     for (int e = 0; e < 4; ++e)
       if ((hanging >> e) & 1) {

@@ -14,6 +14,10 @@
 
 namespace cisamr::subdivide {
 
+// Reach, in cells of the cell's level: a cell reads its corners' final positions and masks
+// and the crossings on its own edges, so no more than r-adaptivity's.
+inline constexpr int kReachCells2 = radapt::kReachCells2;
+
 struct Triangles2 {
   std::vector<Vec2> extra_points;  // points created here; node id = nodes.size() + index
   std::vector<std::int32_t> triangles;  // 3 node ids per triangle, counter-clockwise

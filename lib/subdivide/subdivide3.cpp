@@ -3,9 +3,9 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
-#include <stdexcept>
 #include <utility>
 
+#include "core/check.hpp"
 #include "grid/cut_stencil3.hpp"
 #include "mesh/metrics.hpp"
 #include "subdivide/templates3.hpp"
@@ -205,11 +205,10 @@ class Subdivider3 {
              const std::array<std::int32_t, 6>& mid_id, unsigned hanging) {
     ++out_.closed_tets;
     for (std::int32_t id : vid)
-      if (nodes_.state[static_cast<std::size_t>(id)] != radapt::NodeState::stayed)
-        throw std::logic_error("subdivide3: a tet with hanging midpoints has a moved or collapsed vertex (rule R4 broken)");
+      CISAMR_CHECK(nodes_.state[static_cast<std::size_t>(id)] == radapt::NodeState::stayed,
+                   "subdivide3: a tet with hanging midpoints has a moved or collapsed vertex (rule R4 broken)");
     const PhaseMask common = mask_of(vid[0]) & mask_of(vid[1]) & mask_of(vid[2]) & mask_of(vid[3]);
-    if (!single_bit(common))
-      throw std::logic_error("subdivide3: a tet with hanging midpoints is cut (rule R4 broken)");
+    CISAMR_CHECK(single_bit(common), "subdivide3: a tet with hanging midpoints is cut (rule R4 broken)");
     const int phase = std::countr_zero(common);
     const auto& c = templates3::closure(forest_.kind(t), hanging, keys);
     std::array<std::int32_t, 11> point{};

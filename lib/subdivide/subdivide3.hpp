@@ -21,6 +21,11 @@
 
 namespace cisamr::subdivide {
 
+// Reach, in cells of the leaf's level: a leaf reads its vertices' final positions and
+// masks, cut points keyed by edges and computed from their ends' final positions, and its
+// own closure, so no more than r-adaptivity's (swapped cubes bring faceswap's reach).
+inline constexpr int kReachCells3 = radapt::kReachCells3;
+
 struct Tets3 {
   std::vector<Vec3> extra_points;       // points created here; node id = nodes.size() + index
   // Per extra point, the identity every partition computes alike: a cut node is its edge's

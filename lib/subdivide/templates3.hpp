@@ -1,5 +1,5 @@
 #pragma once
-// 3D closure templates (lib/subdivide/README3.md): tetrahedra of the nested honeycomb
+// 3D closure templates (lib/subdivide/README.md, 3D part): tetrahedra of the nested honeycomb
 // (grid/tet_lattice.hpp) whose edges carry hanging midpoints are split into sub-tets that
 // match, face by face, whatever the neighbour does.
 //
@@ -154,7 +154,7 @@ struct Closure {
 
 // Steiner positions tried, in order (ties keep the earlier one): the centroid, then points
 // nearer the apex of a corner tet. The shortlist holds every winner of a search over all
-// interior points with weights in sixteenths (README3.md), so it gives the same table.
+// interior points with weights in sixteenths (README.md), so it gives the same table.
 inline constexpr std::array<SteinerWeights, 13> kSteinerCandidates = {{{4, 4, 4, 4},
                                                                        {5, 3, 3, 5}, {5, 3, 5, 3}, {5, 5, 3, 3},
                                                                        {5, 4, 4, 3}, {5, 4, 3, 4}, {5, 3, 4, 4},

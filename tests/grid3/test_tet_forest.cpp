@@ -78,7 +78,7 @@ TEST(TetForest, UniformRefinementIsConforming) {
     EXPECT_TRUE(r.ok(6 * 2 * s * s * s)) << "level " << level << ": " << r.first_problem;
   }
   EXPECT_THROW(f.refine(static_cast<std::int32_t>(f.size()) - 1), MeshingError);  // beyond Lmax
-  EXPECT_THROW(f.refine(0), MeshingError);                                       // not a leaf
+  EXPECT_THROW(f.refine(0), InternalError);                                      // not a leaf
 }
 
 // Random refinement; find() and face_neighbour() against a brute-force search by vertex

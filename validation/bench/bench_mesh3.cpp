@@ -1,5 +1,5 @@
 // Benchmark of the 3D mesher against TetGen 1.5 (not a test): one scene, both meshers in
-// one run, measured alike (validation/tetgen_ref/compare3.hpp): tetrahedra, wall time,
+// one run, measured alike (lib/compare/compare3.hpp): tetrahedra, wall time,
 // tets/s, peak memory (each mesher in a forked child), bytes per tet, volume errors,
 // aspect-ratio distribution, dihedral angles, conformity; the time ratio TetGen / ours.
 //
@@ -21,7 +21,7 @@
 
 #include "core/error.hpp"
 #include "io/scene_io.hpp"
-#include "tetgen_ref/compare3.hpp"
+#include "compare/compare3.hpp"
 
 using namespace cisamr;
 
@@ -31,7 +31,7 @@ int main(int argc, char** argv) {
   int match_runs = -1, repeats = 1;
   double match_tolerance = -1;
   int levels = -1;
-  tetgen_ref::CompareOptions options;
+  compare::CompareOptions options;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     const bool has_value = i + 1 < argc;
@@ -70,11 +70,11 @@ int main(int argc, char** argv) {
     if (match_tolerance > 0) options.match_tolerance = match_tolerance;
     options.repeats = repeats;
     options.progress = [](const std::string& what) { std::fprintf(stderr, "bench_mesh3: %s\n", what.c_str()); };
-    const tetgen_ref::Comparison c = tetgen_ref::compare3(scene, options);
-    std::fputs(tetgen_ref::comparison_table(c).c_str(), stdout);
+    const compare::Comparison c = compare::compare3(scene, options);
+    std::fputs(compare::comparison_table(c).c_str(), stdout);
     if (!json_file.empty()) {
       std::ofstream out(json_file);
-      out << tetgen_ref::comparison_json(c);
+      out << compare::comparison_json(c);
       if (!out) throw std::runtime_error("cannot write " + json_file);
     }
   } catch (const InputError& e) {

@@ -1,5 +1,5 @@
-// The TetGen reference (validation/tetgen_ref): surfaces, PLC, regions, volumes, and the
-// side-by-side comparison on a small scene.
+// The TetGen reference and the comparison (lib/compare): surfaces, PLC, regions, volumes,
+// and the side-by-side comparison on a small scene.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -9,11 +9,11 @@
 #include "core/error.hpp"
 #include "mesh/metrics.hpp"
 #include "quality/quality.hpp"
-#include "tetgen_ref/compare3.hpp"
-#include "tetgen_ref/tetgen_mesh.hpp"
+#include "compare/compare3.hpp"
+#include "compare/tetgen_mesh.hpp"
 
 using namespace cisamr;
-using namespace cisamr::tetgen_ref;
+using namespace cisamr::compare;
 
 namespace {
 

@@ -1,5 +1,5 @@
 // Our 3D mesher and TetGen on one scene, measured alike. See compare3.hpp.
-#include "tetgen_ref/compare3.hpp"
+#include "compare/compare3.hpp"
 
 #include <sys/resource.h>
 #include <sys/wait.h>
@@ -21,7 +21,7 @@
 #include "pipeline/pipeline.hpp"
 #include "quality/quality.hpp"
 
-namespace cisamr::tetgen_ref {
+namespace cisamr::compare {
 namespace {
 
 using Json = nlohmann::json;
@@ -730,4 +730,4 @@ std::string comparison_html(const Comparison& c) {
   return html;
 }
 
-}  // namespace cisamr::tetgen_ref
+}  // namespace cisamr::compare

@@ -1,6 +1,6 @@
 #pragma once
-// The TetGen 1.5 reference mesher (validation only, DESIGN.md §1: TetGen is never the
-// product's mesh). Builds a piecewise linear complex from a scene of spheres and
+// The TetGen 1.5 reference mesher (for comparison only, DESIGN.md §1: TetGen is never
+// the product's mesh). Builds a piecewise linear complex from a scene of spheres and
 // ellipsoids: the domain box's 6 faces plus every inclusion as a closed triangulated
 // surface (a geodesic icosphere, vertices on the exact surface), one region seed per
 // inclusion and one for the matrix, then runs `tetrahedralize` with -pq<ratio>a<volume>AQ.
@@ -14,7 +14,7 @@
 #include "geometry/scene.hpp"
 #include "mesh/simplex_mesh.hpp"
 
-namespace cisamr::tetgen_ref {
+namespace cisamr::compare {
 
 struct TetgenOptions {
   double radius_edge_ratio = 1.4;  // -q: TetGen's quality bound (radius-edge ratio)
@@ -62,4 +62,4 @@ void check_tetgen_scene(const geometry::SceneDesc& scene);
 // for anything else, and std::runtime_error when TetGen stops with an error code.
 TetgenMesh mesh_scene_with_tetgen(const geometry::SceneDesc& scene, const TetgenOptions& options);
 
-}  // namespace cisamr::tetgen_ref
+}  // namespace cisamr::compare

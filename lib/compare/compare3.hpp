@@ -13,9 +13,9 @@
 
 #include "geometry/scene.hpp"
 #include "pipeline/pipeline.hpp"
-#include "tetgen_ref/tetgen_mesh.hpp"
+#include "compare/tetgen_mesh.hpp"
 
-namespace cisamr::tetgen_ref {
+namespace cisamr::compare {
 
 // Aspect-ratio bins of the report: [1,1.5) [1.5,2) [2,3) [3,4) [4,5) [5,10) [10,inf].
 inline constexpr std::array<double, 7> kAspectBinLower{1.0, 1.5, 2.0, 3.0, 4.0, 5.0, 10.0};
@@ -117,4 +117,4 @@ std::string comparison_table(const Comparison& c);  // plain text, fixed-width c
 std::string comparison_json(const Comparison& c);   // "cisamr-compare/1"
 std::string comparison_html(const Comparison& c);   // one self-contained page
 
-}  // namespace cisamr::tetgen_ref
+}  // namespace cisamr::compare

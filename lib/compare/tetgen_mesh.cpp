@@ -11,9 +11,9 @@
 
 #include "core/error.hpp"
 #include "mesh/metrics.hpp"
-#include "tetgen_ref/tetgen_mesh.hpp"
+#include "compare/tetgen_mesh.hpp"
 
-namespace cisamr::tetgen_ref {
+namespace cisamr::compare {
 namespace {
 
 double seconds_since(std::chrono::steady_clock::time_point start) {
@@ -348,4 +348,4 @@ TetgenMesh mesh_scene_with_tetgen(const geometry::SceneDesc& scene, const Tetgen
   return result;
 }
 
-}  // namespace cisamr::tetgen_ref
+}  // namespace cisamr::compare
