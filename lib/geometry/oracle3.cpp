@@ -10,6 +10,7 @@
 #include <string>
 
 #include "core/error.hpp"
+#include "core/vec_math.hpp"
 #include "geometry/box_index.hpp"
 #include "geometry/box_tests.hpp"
 #include "geometry/overlap_groups.hpp"
@@ -53,12 +54,6 @@ struct Item {
   Box3 box;
 };
 
-Vec3 sub(const Vec3& a, const Vec3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
-double dot(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-double norm(const Vec3& a) { return std::sqrt(dot(a, a)); }
-Vec3 cross(const Vec3& a, const Vec3& b) {
-  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-}
 double box_size(const Box3& b) { return norm(sub(b.max, b.min)); }
 bool point_in_box(const Vec3& p, const Box3& b) {
   return p[0] >= b.min[0] && p[0] <= b.max[0] && p[1] >= b.min[1] && p[1] <= b.max[1] &&

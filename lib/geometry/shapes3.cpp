@@ -6,6 +6,7 @@
 #include <limits>
 #include <stdexcept>
 
+#include "core/vec_math.hpp"
 #include "geometry/shapes_detail.hpp"
 #include "geometry/stl_mesh.hpp"
 
@@ -14,8 +15,6 @@ namespace {
 
 [[noreturn]] void not_implemented() { throw std::logic_error("not implemented yet"); }
 
-double dot(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-double norm(const Vec3& a) { return std::sqrt(dot(a, a)); }
 
 // Body coordinates of an ellipsoid: columns of `rotation` are the body axes.
 Vec3 to_body(const Ellipsoid& e, const Vec3& p) {
