@@ -16,8 +16,7 @@
 
 #include "commands.hpp"
 #include "core/error.hpp"
-#include "geometry/oracle2.hpp"
-#include "geometry/oracle3.hpp"
+#include "geometry/oracle.hpp"
 #include "io/atomic_file.hpp"
 #include "io/mesh_io.hpp"
 #include "io/mesh_svg.hpp"

@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "core/vec_math.hpp"
+#include "geometry/shape_sphere_ellipsoid.hpp"
 #include "geometry/shapes_detail.hpp"
 #include "geometry/stl_mesh.hpp"
 
@@ -65,7 +66,15 @@ Box3 bounding_box3(const Shape& s) {
     const double r = sp->radius;
     return {{sp->center[0] - r, sp->center[1] - r, sp->center[2] - r}, {sp->center[0] + r, sp->center[1] + r, sp->center[2] + r}};
   }
-  if (std::get_if<Ellipsoid>(&s) || std::get_if<Cylinder>(&s)) {
+  if (const auto* e = std::get_if<Ellipsoid>(&s)) {
+    Box3 b{};
+    for (int d = 0; d < 3; ++d) {
+      const double h = ellipsoid_half_extent(*e, d);
+      b.min[d] = e->center[d] - h, b.max[d] = e->center[d] + h;
+    }
+    return b;
+  }
+  if (std::get_if<Cylinder>(&s)) {
     Box3 b{};
     for (int i = 0; i < 3; ++i) {
       Vec3 d{0, 0, 0};

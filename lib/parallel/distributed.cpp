@@ -5,8 +5,7 @@
 #include <map>
 #include <regex>
 
-#include "geometry/oracle2.hpp"
-#include "geometry/oracle3.hpp"
+#include "geometry/oracle.hpp"
 #include "geometry/shapes.hpp"
 #include "io/scene_io.hpp"
 #include "parallel/collective.hpp"

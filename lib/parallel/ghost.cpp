@@ -3,8 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "geometry/oracle2.hpp"
-#include "geometry/oracle3.hpp"
+#include "geometry/oracle.hpp"
 #include "geometry/shapes.hpp"
 #include "pipeline/effective_levels.hpp"
 #include "pipeline/pipeline3.hpp"

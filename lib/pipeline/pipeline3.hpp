@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "core/timer.hpp"
-#include "geometry/oracle3.hpp"
+#include "geometry/oracle.hpp"
 #include "grid/tet_lattice.hpp"
 #include "mesh/simplex_mesh.hpp"
 #include "pipeline/pipeline.hpp"  // Options (alpha, extra_levels), shared with 2D

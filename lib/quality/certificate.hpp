@@ -13,8 +13,10 @@
 #include "quality/quality.hpp"
 
 namespace cisamr::geometry {
-class Oracle2;
-class Oracle3;
+template <int Dim>
+class Oracle;
+using Oracle2 = Oracle<2>;
+using Oracle3 = Oracle<3>;
 struct SceneDesc;
 }  // namespace cisamr::geometry
 
@@ -67,7 +69,7 @@ Certificate certify(const mesh::SimplexMesh<Dim>& m, const Box<Dim>& domain, con
 Certificate certify(const mesh::Mesh2& m, const geometry::Oracle2& oracle, const CertifyOptions& options);
 
 // Against a scene, 3D, as the 2D one: domain from the scene, expected volume = domain −
-// voids (Oracle3::phase_volumes), inner boundary allowed iff the scene has a void phase,
+// voids (Oracle3::phase_measures), inner boundary allowed iff the scene has a void phase,
 // plus the 3D phase-fidelity check (nodes, centroids, per-phase volumes).
 Certificate certify(const mesh::Mesh3& m, const geometry::Oracle3& oracle, const CertifyOptions& options);
 

@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <cstdio>
 
-#include "geometry/oracle2.hpp"
+#include "geometry/oracle.hpp"
 #include "geometry/scene.hpp"
 #include "quality/certificate.hpp"
 
@@ -43,7 +43,7 @@ Certificate certify(const mesh::Mesh2& m, const geometry::Oracle2& oracle, const
   CertifyOptions o = options;
   o.allow_inner_boundary = has_void(scene);
   double expected = box_measure(domain);
-  const std::vector<double> areas = oracle.phase_areas();
+  const std::vector<double> areas = oracle.phase_measures();
   for (std::size_t k = 0; k < scene.phases.size() && k < areas.size(); ++k)
     if (scene.phases[k].is_void) expected -= areas[k];
   o.expected_measure = expected;

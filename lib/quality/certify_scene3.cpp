@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <cstdio>
 
-#include "geometry/oracle3.hpp"
+#include "geometry/oracle.hpp"
 #include "geometry/scene.hpp"
 #include "quality/certificate.hpp"
 
@@ -17,7 +17,7 @@ Certificate certify(const mesh::Mesh3& m, const geometry::Oracle3& oracle, const
   CertifyOptions o = options;
   o.allow_inner_boundary =
       std::any_of(scene.phases.begin(), scene.phases.end(), [](const geometry::Phase& p) { return p.is_void; });
-  const std::vector<double> volumes = oracle.phase_volumes();
+  const std::vector<double> volumes = oracle.phase_measures();
   double expected = (domain.max[0] - domain.min[0]) * (domain.max[1] - domain.min[1]) * (domain.max[2] - domain.min[2]);
   for (std::size_t k = 0; k < scene.phases.size() && k < volumes.size(); ++k)
     if (scene.phases[k].is_void) expected -= volumes[k];

@@ -5,7 +5,7 @@
 #include <limits>
 #include <string>
 
-#include "geometry/oracle2.hpp"
+#include "geometry/oracle.hpp"
 #include "mesh/metrics.hpp"
 #include "quality/facet_table.hpp"
 #include "quality/quality.hpp"
@@ -43,7 +43,7 @@ FidelityReport check_fidelity(const mesh::Mesh2& m, const geometry::Oracle2& ora
     r.phase_is_void.push_back(p.is_void);
   }
   r.phase_measure.assign(phases, 0.0);
-  r.exact_phase_measure = oracle.phase_areas();
+  r.exact_phase_measure = oracle.phase_measures();
   r.exact_phase_measure.resize(phases, 0.0);
   r.relative_error.assign(phases, std::numeric_limits<double>::quiet_NaN());
   auto example = [&](std::string s) {

@@ -9,7 +9,7 @@
 #include <limits>
 #include <string>
 
-#include "geometry/oracle3.hpp"
+#include "geometry/oracle.hpp"
 #include "mesh/metrics.hpp"
 #include "quality/facet_table.hpp"
 #include "quality/quality.hpp"
@@ -97,7 +97,7 @@ FidelityReport check_fidelity(const mesh::Mesh3& m, const geometry::Oracle3& ora
   }
   r.phase_measure.assign(phases, 0.0);
   if (exact_volumes.empty())
-    r.exact_phase_measure = oracle.phase_volumes();
+    r.exact_phase_measure = oracle.phase_measures();
   else
     r.exact_phase_measure.assign(exact_volumes.begin(), exact_volumes.end());
   r.exact_phase_measure.resize(phases, 0.0);

@@ -14,8 +14,10 @@
 #include "mesh/simplex_mesh.hpp"
 
 namespace cisamr::geometry {
-class Oracle2;
-class Oracle3;
+template <int Dim>
+class Oracle;
+using Oracle2 = Oracle<2>;
+using Oracle3 = Oracle<3>;
 struct SceneDesc;
 }  // namespace cisamr::geometry
 
@@ -159,9 +161,9 @@ FidelityReport check_fidelity(const mesh::Mesh2& m, const geometry::Oracle2& ora
 
 // 3D: the node checks of the 2D version (a node within tol of the closure of every phase
 // of its cells, void-boundary nodes on a void), the centroid check above, and per-phase
-// volumes against Oracle3::phase_volumes() (spheres, ellipsoids, cylinders and closed STL
+// volumes against Oracle3::phase_measures() (spheres, ellipsoids, cylinders and closed STL
 // surfaces, clipped by the box, overlapping unions included).
-// `exact_volumes`: the oracle's phase_volumes() when the caller has them already (they
+// `exact_volumes`: the oracle's phase_measures() when the caller has them already (they
 // are integrated for clipped or overlapping inclusions); empty: computed here.
 // `strict_tol` (optional, ≤ tol): also count the nodes beyond it (nodes_beyond_strict).
 FidelityReport check_fidelity(const mesh::Mesh3& m, const geometry::Oracle3& oracle, double tol,

@@ -3,7 +3,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "geometry/oracle2.hpp"
+#include "geometry/oracle.hpp"
 #include "geometry/scene.hpp"
 #include "mesh_builders.hpp"
 #include "quality/certificate.hpp"
