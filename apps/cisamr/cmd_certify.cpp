@@ -41,9 +41,9 @@ quality::Certificate certify_mesh(const mesh::SimplexMesh<Dim>& mesh, const geom
     return c;
   }
   progress(flags, "building the geometry oracle");
-  const quality::OracleOf<Dim> oracle = [&] {
+  const geometry::Oracle<Dim> oracle = [&] {
     ScopedPhase timer(&times, "oracle");
-    return quality::OracleOf<Dim>(*scene);
+    return geometry::Oracle<Dim>(*scene);
   }();
   ScopedPhase timer(&times, "certify");
   progress(flags, "checking the mesh against the scene");

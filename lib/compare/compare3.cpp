@@ -16,7 +16,7 @@
 #include <string>
 
 #include "core/error.hpp"
-#include "geometry/oracle3.hpp"
+#include "geometry/oracle.hpp"
 #include "mesh/metrics.hpp"
 #include "pipeline/pipeline.hpp"
 #include "quality/quality.hpp"
@@ -306,7 +306,7 @@ MesherReport measure_mesh(const mesh::Mesh3& m, const geometry::SceneDesc& scene
   r.tets = static_cast<std::int64_t>(m.cell_count());
   r.nodes = static_cast<std::int64_t>(m.node_count());
   const geometry::Oracle3 oracle(scene);
-  const std::vector<double> exact_phase = oracle.phase_volumes();
+  const std::vector<double> exact_phase = oracle.phase_measures();
 
   // Volumes per phase and per inclusion (centroid in the shape, slack 1e-9 of its size).
   std::vector<double> phase_volume(scene.phases.size(), 0.0), inclusion_volume(scene.inclusions.size(), 0.0);

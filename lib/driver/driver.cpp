@@ -6,8 +6,7 @@
 #include <utility>
 
 #include "core/error.hpp"
-#include "geometry/oracle2.hpp"
-#include "geometry/oracle3.hpp"
+#include "geometry/oracle.hpp"
 #include "io/mesh_io.hpp"
 #include "io/mesh_svg.hpp"
 #include "io/scene_io.hpp"
@@ -36,7 +35,7 @@ double cell_measure(const mesh::SimplexMesh<Dim>& m, std::size_t c) {
 // One process, no partitions: the sequential mesher, its result as the one partition.
 template <int Dim>
 void mesh_sequential(const Comm& comm, const geometry::SceneDesc& scene, MeshRun<Dim>& run) {
-  using Oracle = std::conditional_t<Dim == 2, geometry::Oracle2, geometry::Oracle3>;
+  using Oracle = geometry::Oracle<Dim>;
   tell(comm, run.options, "building the geometry oracle");
   const Oracle oracle(scene);
   tell(comm, run.options,

@@ -21,7 +21,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "geometry/oracle3.hpp"
+#include "geometry/oracle.hpp"
 #include "grid/tet_lattice.hpp"
 #include "radapt/radapt3.hpp"
 #include "samr/samr3.hpp"

@@ -1,5 +1,5 @@
 #pragma once
-// The overlap check shared by Oracle2 and Oracle3 (private to lib/geometry).
+// The overlap check of the oracle at construction (private to lib/geometry).
 #include <algorithm>
 #include <cstdint>
 #include <numeric>
@@ -13,7 +13,7 @@ namespace cisamr::geometry::detail {
 
 // Throws InputError when inclusions of different phases overlap; otherwise sets
 // items[k].group to the smallest id of k's group of same-phase inclusions whose closed
-// regions meet (union–find). Impl is Oracle2::Impl or Oracle3::Impl: it has `items`,
+// regions meet (union–find). Impl is Oracle<Dim>::Impl: it has `items`,
 // `boxes`, `scene` and regions_intersect(i, j, interiors).
 template <class Impl>
 void group_overlapping_inclusions(Impl& m) {

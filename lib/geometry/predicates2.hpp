@@ -2,7 +2,7 @@
 // Exact 2D predicates on double inputs (private to lib/geometry). The inputs are taken
 // as exact numbers; the answers are the exact signs (filtered evaluation, exact Mpzf
 // fallback), so topology decided with them never depends on rounding.
-// Implemented in predicates2.cpp, the only place besides oracle2.cpp that sees CGAL.
+// Implemented in predicates2.cpp, with box_index.cpp and predicates3.cpp the only places that see CGAL.
 #include <span>
 
 #include "core/types.hpp"

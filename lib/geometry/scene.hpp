@@ -1,6 +1,6 @@
 #pragma once
 // The scene description (DESIGN.md §5) as plain data: what io reads and pack writes.
-// No geometry is evaluated here; see oracle2.hpp for the queries.
+// No geometry is evaluated here; see oracle.hpp for the queries.
 #include <array>
 #include <string>
 #include <variant>

@@ -6,6 +6,8 @@
 #include <limits>
 #include <stdexcept>
 
+#include "core/vec_math.hpp"
+#include "geometry/shape_sphere_ellipsoid.hpp"
 #include "geometry/shapes_detail.hpp"
 #include "geometry/stl_mesh.hpp"
 
@@ -14,8 +16,6 @@ namespace {
 
 [[noreturn]] void not_implemented() { throw std::logic_error("not implemented yet"); }
 
-double dot(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-double norm(const Vec3& a) { return std::sqrt(dot(a, a)); }
 
 // Body coordinates of an ellipsoid: columns of `rotation` are the body axes.
 Vec3 to_body(const Ellipsoid& e, const Vec3& p) {
@@ -66,7 +66,15 @@ Box3 bounding_box3(const Shape& s) {
     const double r = sp->radius;
     return {{sp->center[0] - r, sp->center[1] - r, sp->center[2] - r}, {sp->center[0] + r, sp->center[1] + r, sp->center[2] + r}};
   }
-  if (std::get_if<Ellipsoid>(&s) || std::get_if<Cylinder>(&s)) {
+  if (const auto* e = std::get_if<Ellipsoid>(&s)) {
+    Box3 b{};
+    for (int d = 0; d < 3; ++d) {
+      const double h = ellipsoid_half_extent(*e, d);
+      b.min[d] = e->center[d] - h, b.max[d] = e->center[d] + h;
+    }
+    return b;
+  }
+  if (std::get_if<Cylinder>(&s)) {
     Box3 b{};
     for (int i = 0; i < 3; ++i) {
       Vec3 d{0, 0, 0};

@@ -6,6 +6,7 @@
 #include <limits>
 #include <numeric>
 
+#include "core/vec_math.hpp"
 #include "geometry/box_index.hpp"
 #include "geometry/predicates3.hpp"
 
@@ -15,11 +16,6 @@ namespace {
 constexpr int kLeafSize = 4;
 constexpr int kMaxStack = 128;
 
-Vec3 sub(const Vec3& a, const Vec3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
-double dot(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-Vec3 cross(const Vec3& a, const Vec3& b) {
-  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-}
 
 Box3 face_box(const Mesh& m, std::int32_t f) {
   const auto& t = m.faces[f];

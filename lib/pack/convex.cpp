@@ -4,14 +4,11 @@
 #include <array>
 #include <cmath>
 
+#include "core/vec_math.hpp"
+
 namespace cisamr::pack {
 namespace {
 
-double dot(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-Vec3 sub(const Vec3& a, const Vec3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
-Vec3 add(const Vec3& a, const Vec3& b) { return {a[0] + b[0], a[1] + b[1], a[2] + b[2]}; }
-Vec3 scale(const Vec3& a, double s) { return {a[0] * s, a[1] * s, a[2] * s}; }
-double norm(const Vec3& a) { return std::sqrt(dot(a, a)); }
 
 // Closest point to the origin of the convex hull of `w` (1 to 4 points), by enumerating
 // the sub-simplices (Johnson's sub-algorithm, written as a brute-force search: at most 15

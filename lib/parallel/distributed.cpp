@@ -7,8 +7,7 @@
 #include <regex>
 #include <type_traits>
 
-#include "geometry/oracle2.hpp"
-#include "geometry/oracle3.hpp"
+#include "geometry/oracle.hpp"
 #include "geometry/shapes.hpp"
 #include "io/scene_io.hpp"
 #include "parallel/collective.hpp"
@@ -200,7 +199,7 @@ DistributedMesh<Dim> mesh_distributed(const Comm& comm, const std::string& scene
 
 template <int Dim>
 DistributedMesh<Dim> mesh_distributed(const Comm& comm, geometry::SceneDesc scene, const MeshOptions& options) {
-  using Oracle = std::conditional_t<Dim == 2, geometry::Oracle2, geometry::Oracle3>;
+  using Oracle = geometry::Oracle<Dim>;
   DistributedMesh<Dim> out;
   const int ranks = comm.size(), rank = comm.rank();
   const int n = options.partitions;

@@ -12,8 +12,7 @@
 #include <vector>
 
 #include "core/timer.hpp"
-#include "geometry/oracle2.hpp"
-#include "geometry/oracle3.hpp"
+#include "geometry/oracle.hpp"
 #include "geometry/scene.hpp"
 #include "grid/lattice.hpp"
 #include "mesh/simplex_mesh.hpp"

@@ -61,7 +61,7 @@ Certificate certify(const mesh::SimplexMesh<Dim>& m, const Box<Dim>& domain, con
 // (check_fidelity: nodes, in 3D centroids, per-phase measures).
 // options.expected_measure/allow_inner_boundary are ignored.
 template <int Dim>
-Certificate certify(const mesh::SimplexMesh<Dim>& m, const OracleOf<Dim>& oracle, const CertifyOptions& options);
+Certificate certify(const mesh::SimplexMesh<Dim>& m, const geometry::Oracle<Dim>& oracle, const CertifyOptions& options);
 
 std::string certificate_json(const Certificate& c);     // format "cisamr-certificate/1"
 std::string certificate_html(const Certificate& c);     // one page, inline SVG and CSS

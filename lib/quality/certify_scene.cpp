@@ -26,13 +26,13 @@ constexpr const char* kMeshedBoundary = Dim == 2 ? "polygonal" : "polyhedral";
 }  // namespace
 
 template <int Dim>
-Certificate certify(const mesh::SimplexMesh<Dim>& m, const OracleOf<Dim>& oracle, const CertifyOptions& options) {
+Certificate certify(const mesh::SimplexMesh<Dim>& m, const geometry::Oracle<Dim>& oracle, const CertifyOptions& options) {
   const geometry::SceneDesc& scene = oracle.scene();
   const Box<Dim> domain = detail::scene_domain<Dim>(scene);
   CertifyOptions o = options;
   o.allow_inner_boundary =
       std::any_of(scene.phases.begin(), scene.phases.end(), [](const geometry::Phase& p) { return p.is_void; });
-  const std::vector<double> exact = detail::exact_phase_measures<Dim>(oracle);
+  const std::vector<double> exact = oracle.phase_measures();
   double expected = box_measure(domain);
   for (std::size_t k = 0; k < scene.phases.size() && k < exact.size(); ++k)
     if (scene.phases[k].is_void) expected -= exact[k];
@@ -56,7 +56,7 @@ Certificate certify(const mesh::SimplexMesh<Dim>& m, const OracleOf<Dim>& oracle
   return c;
 }
 
-template Certificate certify<2>(const mesh::SimplexMesh<2>&, const OracleOf<2>&, const CertifyOptions&);
-template Certificate certify<3>(const mesh::SimplexMesh<3>&, const OracleOf<3>&, const CertifyOptions&);
+template Certificate certify<2>(const mesh::SimplexMesh<2>&, const geometry::Oracle<2>&, const CertifyOptions&);
+template Certificate certify<3>(const mesh::SimplexMesh<3>&, const geometry::Oracle<3>&, const CertifyOptions&);
 
 }  // namespace cisamr::quality

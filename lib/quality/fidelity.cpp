@@ -73,7 +73,7 @@ std::array<Vec<Dim>, kProbeDirections<Dim>> probe_directions() {
 template <int Dim>
 class Probe {
  public:
-  explicit Probe(const OracleOf<Dim>& oracle) : oracle_(oracle) {
+  explicit Probe(const geometry::Oracle<Dim>& oracle) : oracle_(oracle) {
     if constexpr (kProbeBeforeDistance<Dim>) dirs_ = probe_directions<Dim>();
   }
 
@@ -102,7 +102,7 @@ class Probe {
   }
 
  private:
-  const OracleOf<Dim>& oracle_;
+  const geometry::Oracle<Dim>& oracle_;
   std::array<Vec<Dim>, kProbeDirections<Dim>> dirs_{};
   std::vector<std::int32_t> candidates_;
 };
@@ -119,7 +119,7 @@ double default_fidelity_tolerance(const geometry::SceneDesc& scene) {
 }
 
 template <int Dim>
-FidelityReport check_fidelity(const mesh::SimplexMesh<Dim>& m, const OracleOf<Dim>& oracle, double tol,
+FidelityReport check_fidelity(const mesh::SimplexMesh<Dim>& m, const geometry::Oracle<Dim>& oracle, double tol,
                               std::span<const double> exact_measures, double strict_tol) {
   const geometry::SceneDesc& scene = oracle.scene();
   FidelityReport r;
@@ -133,7 +133,7 @@ FidelityReport check_fidelity(const mesh::SimplexMesh<Dim>& m, const OracleOf<Di
   }
   r.phase_measure.assign(phases, 0.0);
   if (exact_measures.empty())
-    r.exact_phase_measure = detail::exact_phase_measures<Dim>(oracle);
+    r.exact_phase_measure = oracle.phase_measures();
   else
     r.exact_phase_measure.assign(exact_measures.begin(), exact_measures.end());
   r.exact_phase_measure.resize(phases, 0.0);
@@ -276,9 +276,9 @@ FidelityReport check_fidelity(const mesh::SimplexMesh<Dim>& m, const OracleOf<Di
   return r;
 }
 
-template FidelityReport check_fidelity<2>(const mesh::SimplexMesh<2>&, const OracleOf<2>&, double,
+template FidelityReport check_fidelity<2>(const mesh::SimplexMesh<2>&, const geometry::Oracle<2>&, double,
                                           std::span<const double>, double);
-template FidelityReport check_fidelity<3>(const mesh::SimplexMesh<3>&, const OracleOf<3>&, double,
+template FidelityReport check_fidelity<3>(const mesh::SimplexMesh<3>&, const geometry::Oracle<3>&, double,
                                           std::span<const double>, double);
 
 }  // namespace cisamr::quality

@@ -8,21 +8,14 @@
 #include <cstdint>
 #include <span>
 #include <string>
-#include <type_traits>
 #include <vector>
 
 #include "core/types.hpp"
-#include "geometry/oracle2.hpp"
-#include "geometry/oracle3.hpp"
+#include "geometry/oracle.hpp"
 #include "geometry/scene.hpp"
 #include "mesh/simplex_mesh.hpp"
 
 namespace cisamr::quality {
-
-// The geometry oracle of a dimension: the only place that names the per-dimension oracle
-// classes (the checks against a scene are written once, for both).
-template <int Dim>
-using OracleOf = std::conditional_t<Dim == 2, geometry::Oracle2, geometry::Oracle3>;
 
 // ---------------------------------------------------------------------------------------
 // Aspect ratio (Verdict definition, mesh/metrics.hpp) and angles.
@@ -170,7 +163,7 @@ double default_fidelity_tolerance(const geometry::SceneDesc& scene);
 // are integrated for clipped or overlapping inclusions); empty: computed here.
 // `strict_tol` (optional, ≤ tol): also count the nodes beyond it (nodes_beyond_strict).
 template <int Dim>
-FidelityReport check_fidelity(const mesh::SimplexMesh<Dim>& m, const OracleOf<Dim>& oracle, double tol,
+FidelityReport check_fidelity(const mesh::SimplexMesh<Dim>& m, const geometry::Oracle<Dim>& oracle, double tol,
                               std::span<const double> exact_measures = {}, double strict_tol = -1);
 
 // ---------------------------------------------------------------------------------------

@@ -16,13 +16,4 @@ inline Box<Dim> scene_domain(const geometry::SceneDesc& scene) {
   return b;
 }
 
-// The exact (or integrated) measure of each phase inside the domain, by phase index.
-template <int Dim>
-inline std::vector<double> exact_phase_measures(const OracleOf<Dim>& oracle) {
-  if constexpr (Dim == 2)
-    return oracle.phase_areas();
-  else
-    return oracle.phase_volumes();
-}
-
 }  // namespace cisamr::quality::detail

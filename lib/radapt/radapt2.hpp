@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "core/types.hpp"
-#include "geometry/oracle2.hpp"
+#include "geometry/oracle.hpp"
 #include "grid/key_map.hpp"
 #include "grid/lattice.hpp"
 #include "samr/samr2.hpp"

@@ -22,7 +22,7 @@
 #include <vector>
 
 #include "core/types.hpp"
-#include "geometry/oracle3.hpp"
+#include "geometry/oracle.hpp"
 #include "grid/key_map.hpp"
 #include "grid/tet_lattice.hpp"
 #include "samr/samr3.hpp"

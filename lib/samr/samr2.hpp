@@ -13,7 +13,7 @@
 #include <span>
 #include <vector>
 
-#include "geometry/oracle2.hpp"
+#include "geometry/oracle.hpp"
 #include "grid/quad_forest.hpp"
 
 namespace cisamr::samr {

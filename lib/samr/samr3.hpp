@@ -20,7 +20,7 @@
 #include <span>
 #include <vector>
 
-#include "geometry/oracle3.hpp"
+#include "geometry/oracle.hpp"
 #include "grid/tet_forest.hpp"
 
 namespace cisamr::samr {

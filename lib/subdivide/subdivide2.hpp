@@ -7,7 +7,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "geometry/oracle2.hpp"
+#include "geometry/oracle.hpp"
 #include "grid/lattice.hpp"
 #include "radapt/radapt2.hpp"
 #include "samr/samr2.hpp"

@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "faceswap/faceswap3.hpp"
-#include "geometry/oracle3.hpp"
+#include "geometry/oracle.hpp"
 #include "grid/lattice.hpp"
 #include "radapt/radapt3.hpp"
 #include "samr/samr3.hpp"

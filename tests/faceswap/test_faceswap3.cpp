@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "faceswap/faceswap3.hpp"
-#include "geometry/oracle3.hpp"
+#include "geometry/oracle.hpp"
 #include "grid/tet_lattice.hpp"
 #include "radapt/radapt3.hpp"
 #include "samr/samr3.hpp"

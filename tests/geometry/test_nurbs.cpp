@@ -6,7 +6,7 @@
 #include <random>
 
 #include "core/error.hpp"
-#include "geometry/oracle2.hpp"
+#include "geometry/oracle.hpp"
 
 using namespace cisamr;
 using namespace cisamr::geometry;
@@ -70,7 +70,7 @@ TEST(Oracle2Nurbs, RationalCircleClassifiesLikeTheCircle) {
   EXPECT_EQ(o.closure_phases({0.5, 0.2}, c), PhaseMask(3));
   EXPECT_NEAR(o.distance_to_phase({0.5, 0.95}, 1), 0.15, 1e-12);
   EXPECT_NEAR(o.distance_to_phase({0.5, 0.45}, 0), 0.25, 1e-12);
-  EXPECT_NEAR(o.phase_areas()[1], M_PI * 0.09, 1e-12);
+  EXPECT_NEAR(o.phase_measures()[1], M_PI * 0.09, 1e-12);
 }
 
 TEST(Oracle2Nurbs, RationalCircleCrossesLikeTheCircle) {
@@ -111,14 +111,14 @@ TEST(Oracle2Nurbs, PeriodicCubicAreaAndClassification) {
   Oracle2 o(s);
   EXPECT_EQ(o.phase_at({0.5, 0.5}, all(o)), 1);
   EXPECT_EQ(o.phase_at({0.02, 0.02}, all(o)), 0);
-  const auto a = o.phase_areas();
+  const auto a = o.phase_measures();
   // Same blob shifted to straddle the domain edge: clipped areas integrate by lines.
   EXPECT_GT(a[1], 0.1);
   EXPECT_NEAR(a[0] + a[1], 1.0, 1e-12);
   SceneDesc s2 = base_scene();
   s2.inclusions = {{periodic_blob({0.5, 0.5}, 0.25), 2, 0}, {periodic_blob({0.5, 0.5}, 0.25), 2, 0}};
   Oracle2 o2(s2);  // two identical same-phase blobs: integrated, not analytic
-  EXPECT_NEAR(o2.phase_areas()[1], a[1], 1e-11);
+  EXPECT_NEAR(o2.phase_measures()[1], a[1], 1e-11);
 }
 
 TEST(Oracle2Nurbs, ValidationErrors) {

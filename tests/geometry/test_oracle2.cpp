@@ -9,7 +9,7 @@
 #include <random>
 
 #include "core/error.hpp"
-#include "geometry/oracle2.hpp"
+#include "geometry/oracle.hpp"
 
 using namespace cisamr;
 using namespace cisamr::geometry;
@@ -353,7 +353,7 @@ TEST(Oracle2, AreasMatchAnalyticFormulas) {
                   circle(1.0, 0.3, 0.1),                          // half inside the domain
                   circle(0.2, 0.75, 0.1), circle(0.3, 0.75, 0.1)};  // a lens pair
   Oracle2 o(s);
-  const auto a = o.phase_areas();
+  const auto a = o.phase_measures();
   const double r = 0.1, d = 0.1;
   const double lens = 2 * r * r * std::acos(d / (2 * r)) - 0.5 * d * std::sqrt(4 * r * r - d * d);
   const double fiber = M_PI * r * r + 0.5 * M_PI * r * r + (2 * M_PI * r * r - lens);
@@ -414,7 +414,7 @@ TEST(Oracle2, DistanceToMatrixInsideOverlappingCircles) {
   // Union area = 2πr² − lens.
   const double r = 0.25, d = 0.25;
   const double lens = 2 * r * r * std::acos(d / (2 * r)) - 0.5 * d * std::sqrt(4 * r * r - d * d);
-  const auto areas = o.phase_areas();
+  const auto areas = o.phase_measures();
   EXPECT_NEAR(areas[1], 2 * M_PI * r * r - lens, 1e-11);
   EXPECT_NEAR(areas[0], 1 - (2 * M_PI * r * r - lens), 1e-11);
 }

@@ -10,7 +10,7 @@
 #include <random>
 
 #include "core/error.hpp"
-#include "geometry/oracle3.hpp"
+#include "geometry/oracle.hpp"
 #include "geometry/shapes.hpp"
 
 using namespace cisamr;
@@ -168,7 +168,7 @@ TEST(Oracle3Stl, TransformIsScaleThenRotationThenTranslation) {
   EXPECT_EQ(o.closure_phases({0.625, 0.625, 0.625}, c), bit(0) | bit(1));
   EXPECT_EQ(o.closure_phases({0.5, 0.5, 0.5}, c), bit(1));
   EXPECT_EQ(o.closure_phases({0.6, 0.5, 0.7}, c), bit(0));
-  EXPECT_NEAR(o.phase_volumes()[1], 0.25 * 0.25 * 0.25, 1e-15);
+  EXPECT_NEAR(o.phase_measures()[1], 0.25 * 0.25 * 0.25, 1e-15);
   EXPECT_NEAR(shape_measure(inc.shape), 0.25 * 0.25 * 0.25, 1e-15);
   EXPECT_NEAR(shape_boundary_measure(inc.shape), 6 * 0.0625, 1e-15);
   const Box3 b = shape_bounding_box(inc.shape);
@@ -325,7 +325,7 @@ TEST(Oracle3Stl, ValidationErrorsNameTheFace) {
   s.inclusions = {stl(rev)};
   Oracle3 o(s);
   EXPECT_EQ(o.closure_phases({0.3, 0.3, 0.3}, all(o)), bit(1));
-  EXPECT_NEAR(o.phase_volumes()[1], 0.008, 1e-15);
+  EXPECT_NEAR(o.phase_measures()[1], 0.008, 1e-15);
 }
 
 TEST(Oracle3, ValidationOfAnalyticShapes) {
@@ -365,7 +365,7 @@ TEST(Oracle3, VolumesMatchAnalyticFormulas) {
                   {Cylinder{{-0.1, 0.6, 0.2}, {1.1, 0.6, 0.2}, 0.05}, 2, 1},  // clipped to length 1
                   stl(cube_triangles({0.55, 0.05, 0.55}, {0.75, 0.25, 0.75}), 3)};
   Oracle3 o(s);
-  const auto v = o.phase_volumes();
+  const auto v = o.phase_measures();
   const double ball = 4.0 / 3.0 * M_PI * r * r * r, d = 0.1;
   const double lens = M_PI * (4 * r + d) * (2 * r - d) * (2 * r - d) / 12;
   const double fiber = ball + 0.5 * ball + (2 * ball - lens) + M_PI * 0.05 * 0.05 * 1.0;
@@ -381,7 +381,7 @@ TEST(Oracle3, VolumesMatchAnalyticFormulas) {
   const double lens2 = M_PI * (r1 + r2 - dd) * (r1 + r2 - dd) *
                        (dd * dd + 2 * dd * (r1 + r2) - 3 * (r1 - r2) * (r1 - r2)) / (12 * dd);
   const double uni = 4.0 / 3.0 * M_PI * (r1 * r1 * r1 + r2 * r2 * r2) - lens2;
-  EXPECT_NEAR(o2.phase_volumes()[1], uni, 1e-10 * uni);
+  EXPECT_NEAR(o2.phase_measures()[1], uni, 1e-10 * uni);
 }
 
 TEST(Oracle3, DistanceToPhase) {
@@ -411,7 +411,7 @@ TEST(Oracle3, GroupsAndDeterminism) {
   EXPECT_EQ(o.interface_group(1), 0);
   EXPECT_EQ(o.interface_group(3), 3);
   Oracle3 o2(mixed_scene());
-  const auto v1 = o.phase_volumes(), v2 = o2.phase_volumes();
+  const auto v1 = o.phase_measures(), v2 = o2.phase_measures();
   for (std::size_t i = 0; i < v1.size(); ++i) EXPECT_EQ(std::memcmp(&v1[i], &v2[i], sizeof(double)), 0);
   // Inside the same-phase pair: no interface at the inner sphere boundary.
   auto c = all(o);

@@ -5,7 +5,7 @@
 #include <numeric>
 #include <random>
 
-#include "geometry/oracle2.hpp"
+#include "geometry/oracle.hpp"
 #include "geometry/shapes.hpp"
 
 using namespace cisamr;
@@ -106,12 +106,12 @@ TEST(Oracle2Ellipse, ClassificationCrossingsAndArea) {
   // Vertex of the ellipse: ON.
   const Vec2 v{0.5 + 0.3 * cs, 0.5 + 0.3 * sn};
   EXPECT_EQ(o.closure_phases(v, c), PhaseMask(3));
-  EXPECT_NEAR(o.phase_areas()[1], M_PI * 0.03, 1e-14);
+  EXPECT_NEAR(o.phase_measures()[1], M_PI * 0.03, 1e-14);
   EXPECT_NEAR(o.distance_to_phase({0.5, 0.5}, 0), 0.1, 1e-14);
   EXPECT_NEAR(o.distance_to_phase({0.5 - 0.4 * cs, 0.5 - 0.4 * sn}, 1), 0.1, 1e-14);
   // The same ellipse clipped by the domain: the line integral path.
   SceneDesc s2 = s;
   s2.inclusions = {{Ellipse{{1.0, 0.5}, {0.3, 0.1}, M_PI / 2}, 2, 0}};
   Oracle2 o2(s2);
-  EXPECT_NEAR(o2.phase_areas()[1], 0.5 * M_PI * 0.03, 1e-12);
+  EXPECT_NEAR(o2.phase_measures()[1], 0.5 * M_PI * 0.03, 1e-12);
 }

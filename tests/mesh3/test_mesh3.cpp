@@ -10,7 +10,7 @@
 #include <cstdio>
 #include <string>
 
-#include "geometry/oracle3.hpp"
+#include "geometry/oracle.hpp"
 #include "mesh/metrics.hpp"
 #include "pipeline/pipeline.hpp"
 #include "quality/quality.hpp"
@@ -71,7 +71,7 @@ Outcome mesh_and_check(const std::string& name, const SceneDesc& scene, double v
                              << conformity.measure_error << ")";
 
   // Per-phase volume against the exact one; every node of a phase-k tet in phase k's closure.
-  const std::vector<double> exact = oracle.phase_volumes();
+  const std::vector<double> exact = oracle.phase_measures();
   std::vector<double> volume(scene.phases.size(), 0.0);
   double worst_distance = 0;
   for (std::size_t c = 0; c < m.cell_count(); ++c) {

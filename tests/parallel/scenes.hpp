@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "core/comm.hpp"
-#include "geometry/oracle2.hpp"
+#include "geometry/oracle.hpp"
 #include "geometry/scene.hpp"
 #include "parallel/checksum.hpp"
 #include "parallel/distributed.hpp"

@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "core/comm.hpp"
-#include "geometry/oracle3.hpp"
+#include "geometry/oracle.hpp"
 #include "geometry/scene.hpp"
 #include "io/scene_io.hpp"
 #include "io/stl_io.hpp"

@@ -6,7 +6,7 @@
 #include <cmath>
 #include <string>
 
-#include "geometry/oracle2.hpp"
+#include "geometry/oracle.hpp"
 #include "mesh/metrics.hpp"
 #include "pipeline/pipeline.hpp"
 #include "quality/quality.hpp"
@@ -16,7 +16,7 @@ namespace cisamr {
 namespace {
 
 double void_area(const geometry::Oracle2& oracle) {
-  const auto areas = oracle.phase_areas();
+  const auto areas = oracle.phase_measures();
   double a = 0;
   for (std::size_t p = 0; p < areas.size(); ++p)
     if (oracle.scene().phases[p].is_void) a += areas[p];

@@ -31,7 +31,7 @@
 #include <string>
 #include <vector>
 
-#include "geometry/oracle3.hpp"
+#include "geometry/oracle.hpp"
 #include "io/stl_io.hpp"
 #include "mesh/metrics.hpp"
 #include "pipeline/pipeline.hpp"
@@ -161,7 +161,7 @@ std::vector<double> reference_volumes(const geometry::Oracle3& oracle) {
   for (int i = 0; i < oracle.inclusion_count(); ++i)
     closed_form = closed_form && oracle.interface_group(i) == i &&
                   std::holds_alternative<geometry::Sphere>(s.inclusions[std::size_t(i)].shape);
-  if (closed_form) return oracle.phase_volumes();
+  if (closed_form) return oracle.phase_measures();
   std::vector<double> volume(s.phases.size(), 0.0);
   const double step = s.h / 6;
   int n[3];

@@ -5,8 +5,7 @@
 #include <string>
 #include <utility>
 
-#include "geometry/oracle2.hpp"
-#include "geometry/oracle3.hpp"
+#include "geometry/oracle.hpp"
 #include "geometry/scene.hpp"
 #include "mesh_builders.hpp"
 #include "quality/certificate.hpp"

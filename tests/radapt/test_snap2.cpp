@@ -7,7 +7,7 @@
 #include <map>
 #include <vector>
 
-#include "geometry/oracle2.hpp"
+#include "geometry/oracle.hpp"
 #include "radapt/radapt2.hpp"
 #include "samr/samr2.hpp"
 #include "support/stage_setup.hpp"

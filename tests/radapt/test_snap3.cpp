@@ -13,7 +13,7 @@
 #include <tuple>
 #include <vector>
 
-#include "geometry/oracle3.hpp"
+#include "geometry/oracle.hpp"
 #include "radapt/radapt3.hpp"
 #include "samr/samr3.hpp"
 #include "support/stage_setup.hpp"

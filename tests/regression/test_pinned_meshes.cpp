@@ -17,8 +17,7 @@
 #include <string>
 #include <vector>
 
-#include "geometry/oracle2.hpp"
-#include "geometry/oracle3.hpp"
+#include "geometry/oracle.hpp"
 #include "io/scene_io.hpp"
 #include "io/stl_io.hpp"
 #include "parallel/checksum.hpp"

@@ -15,7 +15,7 @@
 #include <vector>
 
 #include "core/error.hpp"
-#include "geometry/oracle3.hpp"
+#include "geometry/oracle.hpp"
 #include "grid/key_map.hpp"
 #include "samr/samr3.hpp"
 

@@ -13,8 +13,7 @@
 #include <vector>
 
 #include "core/types.hpp"
-#include "geometry/oracle2.hpp"
-#include "geometry/oracle3.hpp"
+#include "geometry/oracle.hpp"
 #include "geometry/scene.hpp"
 #include "grid/cut_stencil3.hpp"
 #include "grid/lattice.hpp"

@@ -14,7 +14,7 @@
 #include <random>
 #include <string>
 
-#include "geometry/oracle2.hpp"
+#include "geometry/oracle.hpp"
 #include "io/scene_io.hpp"
 #include "pipeline/pipeline.hpp"
 #include "quality/quality.hpp"

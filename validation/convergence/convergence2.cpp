@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "geometry/oracle2.hpp"
+#include "geometry/oracle.hpp"
 #include "io/scene_io.hpp"
 #include "mesh/metrics.hpp"
 #include "pipeline/pipeline.hpp"
@@ -29,7 +29,7 @@ int main(int argc, char** argv) {
   for (double h : hs) {
     scene.h = h;
     const geometry::Oracle2 oracle(scene);
-    const auto exact = oracle.phase_areas();
+    const auto exact = oracle.phase_measures();
     const auto result = pipeline::mesh(oracle);
     const auto& m = result.mesh;
     std::vector<double> area(scene.phases.size(), 0);

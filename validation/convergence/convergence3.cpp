@@ -8,14 +8,14 @@
 //   build/bin/convergence3 --n 10 20 40 80       cells per unit-cube side (h = 1/n)
 //   build/bin/convergence3 --levels L            SAMR levels of every inclusion (default 1)
 //   build/bin/convergence3 --scene FILE.json [--h h1 h2 ...]   a scene file (exact volumes
-//                                                from Oracle3::phase_volumes; default h, h/2, h/4)
+//                                                from Oracle3::phase_measures; default h, h/2, h/4)
 //
 // Built-in cases (unit cube, matrix phase 1, inclusion phase 2):
 //   spheres    three disjoint spheres inside the box, r = 0.20, 0.17, 0.13
 //   ellipsoid  one ellipsoid, semi-axes 0.32 × 0.20 × 0.12, rotated about three axes
 //   clipped    a sphere of radius 0.3 centred at x = 0.8, clipped by the face x = 1 (a cap
 //              of height 0.1 is outside; the flat disc and its C0 rim are part of the interface)
-// Exact volumes are analytic (and checked against Oracle3::phase_volumes to 1e-9).
+// Exact volumes are analytic (and checked against Oracle3::phase_measures to 1e-9).
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -25,7 +25,7 @@
 #include <vector>
 
 #include "core/error.hpp"
-#include "geometry/oracle3.hpp"
+#include "geometry/oracle.hpp"
 #include "io/scene_io.hpp"
 #include "mesh/metrics.hpp"
 #include "pipeline/pipeline.hpp"
@@ -106,7 +106,7 @@ struct Row {
 Row run(geometry::SceneDesc scene, double h, const std::vector<double>& exact_given, std::vector<double>& exact) {
   scene.h = h;
   const geometry::Oracle3 oracle(scene);
-  const std::vector<double> from_oracle = oracle.phase_volumes();
+  const std::vector<double> from_oracle = oracle.phase_measures();
   exact = exact_given.empty() ? from_oracle : exact_given;
   for (std::size_t p = 0; p < exact.size(); ++p)
     if (std::abs(from_oracle[p] - exact[p]) > 1e-9 * std::max(1.0, std::abs(exact[p])))

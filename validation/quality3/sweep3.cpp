@@ -13,7 +13,7 @@
 #include <string>
 #include <cstdlib>
 
-#include "geometry/oracle3.hpp"
+#include "geometry/oracle.hpp"
 #include "pipeline/pipeline.hpp"
 #include "quality/quality.hpp"
 

@@ -1,0 +1,33 @@
+// The one place that knows every shape family: scene descriptor → ShapeModel. Adding
+// a shape means adding its shape_<family>.{hpp,cpp} and one line here.
+#include "core/error.hpp"
+#include "geometry/shape_circle_ellipse.hpp"
+#include "geometry/shape_cylinder.hpp"
+#include "geometry/shape_nurbs_curve.hpp"
+#include "geometry/shape_polygon.hpp"
+#include "geometry/shape_sphere_ellipsoid.hpp"
+#include "geometry/shape_stl.hpp"
+
+namespace cisamr::geometry {
+
+template <>
+std::unique_ptr<CurveModel> make_shape_model<2>(const Shape& shape, const std::string& src, const std::string& field) {
+  if (const auto* c = std::get_if<Circle>(&shape)) return std::make_unique<CircleModel>(*c, src, field);
+  if (const auto* e = std::get_if<Ellipse>(&shape)) return std::make_unique<EllipseModel>(*e, src, field);
+  if (const auto* p = std::get_if<Polygon>(&shape)) return std::make_unique<PolygonModel>(*p, src, field);
+  if (const auto* n = std::get_if<NurbsCurve>(&shape)) return std::make_unique<NurbsCurveModel>(*n, src, field);
+  throw InputError(src, field + ".shape", "a 3D shape in a 2D scene");
+}
+
+template <>
+std::unique_ptr<SurfaceModel> make_shape_model<3>(const Shape& shape, const std::string& src, const std::string& field) {
+  if (std::holds_alternative<Sphere>(shape)) return std::make_unique<SphereModel>(shape, src, field);
+  if (std::holds_alternative<Ellipsoid>(shape)) return std::make_unique<EllipsoidModel>(shape, src, field);
+  if (std::holds_alternative<Cylinder>(shape)) return std::make_unique<CylinderModel>(shape, src, field);
+  if (std::holds_alternative<StlSurface>(shape)) return std::make_unique<StlModel>(shape, src, field);
+  if (std::holds_alternative<NurbsSurface>(shape))
+    throw InputError(src, field + ".shape", "nurbs_surface: not supported yet");
+  throw InputError(src, field + ".shape", "a 2D shape in a 3D scene");
+}
+
+}  // namespace cisamr::geometry
