@@ -6,7 +6,6 @@
 
 #include "core/error.hpp"
 #include "geometry/box_tests.hpp"
-#include "geometry/shape_polygon.hpp"
 #include "geometry/shapes.hpp"
 
 namespace cisamr::geometry {
@@ -60,6 +59,59 @@ double ellipse_boundary_distance_local(double a, double b, double x, double y) {
   }
   return std::abs(x - a);
 }
+
+}  // namespace
+
+namespace {
+
+class CircleModel final : public CurveModel {
+ public:
+  CircleModel(const Circle& c, const std::string& source, const std::string& field);
+
+  int side(const Vec2& p) const override;
+  bool segment_events(const Vec2& a, const Vec2& b, const Box2& seg, EventSink& sink,
+                      std::vector<double>& scratch) const override;
+  double boundary_distance(const Vec2& p) const override;
+  bool boundary_touches(const Box2& box) const override;
+  double measure() const override;
+  bool outward_normal(const Vec2& p, Vec2& n) const override;
+  std::optional<bool> regions_intersect(const ShapeModel<2>& other, bool interiors, double depth_tol) const override;
+  void nearest_boundary_points(const Vec2& p, std::vector<Vec2>& out) const override;
+  void boundary_meetings(const ShapeModel<2>& other, const Vec2& p, std::vector<Vec2>& out) const override;
+  bool polygon_meetings(std::span<const Vec2> poly, std::vector<Vec2>& out) const override;
+  Vec2 curve_point(int piece, double s) const override;
+  std::vector<Vec2> boundary_polyline() const override;
+
+ private:
+  Vec2 c_;
+  double r_;
+};
+
+// The ellipse as the unit circle in the frame u = ((x−c)·e1)/a, v = ((x−c)·e2)/b.
+class EllipseModel final : public CurveModel {
+ public:
+  EllipseModel(const Ellipse& e, const std::string& source, const std::string& field);
+
+  int side(const Vec2& p) const override;
+  bool segment_events(const Vec2& a, const Vec2& b, const Box2& seg, EventSink& sink,
+                      std::vector<double>& scratch) const override;
+  double boundary_distance(const Vec2& p) const override;
+  bool boundary_touches(const Box2& box) const override;
+  double measure() const override;
+  bool outward_normal(const Vec2& p, Vec2& n) const override;
+  void nearest_boundary_points(const Vec2& p, std::vector<Vec2>& out) const override;
+  Vec2 curve_point(int piece, double s) const override;
+  std::vector<Vec2> boundary_polyline() const override;
+  int meeting_samples() const override { return 1024; }
+
+ private:
+  Vec2 to_unit_frame(const Vec2& p) const;
+  // Tolerant side: F = 1 − u² − v², |F| below the rounding bound is ON (f_out: F or 0).
+  int tolerant_side(const Vec2& p, double* f_out = nullptr) const;
+
+  Vec2 c_;
+  double a_, b_, cs_, sn_;
+};
 
 }  // namespace
 
@@ -117,23 +169,27 @@ void CircleModel::boundary_meetings(const ShapeModel<2>& other, const Vec2& p, s
     out.push_back({c_[0] + along * ex + h * ey, c_[1] + along * ey - h * ex});
     return;
   }
-  if (const auto* poly_model = dynamic_cast<const PolygonModel*>(&other)) {
-    auto poly = poly_model->vertices();
-    for (std::size_t i = 0, i0 = poly.size() - 1; i < poly.size(); i0 = i++) {
-      const Vec2& u = poly[i0];
-      const Vec2& v = poly[i];
-      // |u + t(v−u) − c|² = r²: A t² + 2B t + C = 0.
-      const double ex = v[0] - u[0], ey = v[1] - u[1], fx = u[0] - c_[0], fy = u[1] - c_[1];
-      const double A = ex * ex + ey * ey, B = fx * ex + fy * ey, C = fx * fx + fy * fy - r_ * r_;
-      const double disc = B * B - A * C;
-      if (disc < 0) continue;
-      const double sq = std::sqrt(disc);
-      for (double t : {(-B - sq) / A, (-B + sq) / A})
-        if (t >= 0 && t <= 1) out.push_back({u[0] + t * ex, u[1] + t * ey});
-    }
+  if (const auto poly = static_cast<const CurveModel&>(other).polygon_vertices(); !poly.empty()) {
+    polygon_meetings(poly, out);
     return;
   }
   CurveModel::boundary_meetings(other, p, out);
+}
+
+bool CircleModel::polygon_meetings(std::span<const Vec2> poly, std::vector<Vec2>& out) const {
+  for (std::size_t i = 0, i0 = poly.size() - 1; i < poly.size(); i0 = i++) {
+    const Vec2& u = poly[i0];
+    const Vec2& v = poly[i];
+    // |u + t(v−u) − c|² = r²: A t² + 2B t + C = 0.
+    const double ex = v[0] - u[0], ey = v[1] - u[1], fx = u[0] - c_[0], fy = u[1] - c_[1];
+    const double A = ex * ex + ey * ey, B = fx * ex + fy * ey, C = fx * fx + fy * fy - r_ * r_;
+    const double disc = B * B - A * C;
+    if (disc < 0) continue;
+    const double sq = std::sqrt(disc);
+    for (double t : {(-B - sq) / A, (-B + sq) / A})
+      if (t >= 0 && t <= 1) out.push_back({u[0] + t * ex, u[1] + t * ey});
+  }
+  return true;
 }
 
 Vec2 CircleModel::curve_point(int, double s) const {
@@ -251,6 +307,16 @@ Vec2 EllipseModel::curve_point(int, double s) const {
 
 std::vector<Vec2> EllipseModel::boundary_polyline() const {
   return polyline_of(Ellipse{c_, {a_, b_}, std::atan2(sn_, cs_)});
+}
+
+std::unique_ptr<CurveModel> make_circle_model(const Circle& circle, const std::string& source,
+                                              const std::string& field) {
+  return std::make_unique<CircleModel>(circle, source, field);
+}
+
+std::unique_ptr<CurveModel> make_ellipse_model(const Ellipse& ellipse, const std::string& source,
+                                               const std::string& field) {
+  return std::make_unique<EllipseModel>(ellipse, source, field);
 }
 
 }  // namespace cisamr::geometry

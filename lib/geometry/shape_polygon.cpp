@@ -7,7 +7,6 @@
 #include "core/error.hpp"
 #include "geometry/box_index.hpp"
 #include "geometry/box_tests.hpp"
-#include "geometry/shape_circle_ellipse.hpp"
 
 namespace cisamr::geometry {
 namespace {
@@ -20,6 +19,34 @@ double segment_distance(const Vec2& p, const Vec2& u, const Vec2& v) {
   t = std::clamp(t, 0.0, 1.0);
   return std::hypot(p[0] - (u[0] + t * dx), p[1] - (u[1] + t * dy));
 }
+
+}  // namespace
+
+namespace {
+
+class PolygonModel final : public CurveModel {
+ public:
+  // Drops repeated consecutive vertices; throws for < 3 distinct vertices, zero area or
+  // self-intersection ("edges x and y").
+  PolygonModel(const Polygon& p, const std::string& source, const std::string& field);
+
+  int side(const Vec2& p) const override;
+  bool segment_events(const Vec2& a, const Vec2& b, const Box2& seg, EventSink& sink,
+                      std::vector<double>& scratch) const override;
+  double boundary_distance(const Vec2& p) const override;
+  bool boundary_touches(const Box2& box) const override;
+  double measure() const override;
+  void x_breakpoints(std::vector<double>& out) const override;
+  void nearest_boundary_points(const Vec2& p, std::vector<Vec2>& out) const override;
+  void boundary_meetings(const ShapeModel<2>& other, const Vec2& p, std::vector<Vec2>& out) const override;
+  std::span<const Vec2> polygon_vertices() const override { return v_; }
+  int piece_count() const override { return static_cast<int>(v_.size()); }
+  Vec2 curve_point(int piece, double s) const override;
+  std::vector<Vec2> boundary_polyline() const override { return v_; }
+
+ private:
+  std::vector<Vec2> v_;
+};
 
 }  // namespace
 
@@ -144,10 +171,7 @@ void PolygonModel::nearest_boundary_points(const Vec2& p, std::vector<Vec2>& out
 }
 
 void PolygonModel::boundary_meetings(const ShapeModel<2>& other, const Vec2& p, std::vector<Vec2>& out) const {
-  if (dynamic_cast<const CircleModel*>(&other)) {
-    other.boundary_meetings(*this, p, out);
-    return;
-  }
+  if (static_cast<const CurveModel&>(other).polygon_meetings(v_, out)) return;
   if (const auto* q = dynamic_cast<const PolygonModel*>(&other)) {
     const auto &pa = v_, &pb = q->v_;
     for (std::size_t i = 0, i0 = pa.size() - 1; i < pa.size(); i0 = i++)
@@ -169,6 +193,11 @@ Vec2 PolygonModel::curve_point(int piece, double s) const {
   const Vec2& u = v_[piece];
   const Vec2& v = v_[(piece + 1) % v_.size()];
   return {u[0] + s * (v[0] - u[0]), u[1] + s * (v[1] - u[1])};
+}
+
+std::unique_ptr<CurveModel> make_polygon_model(const Polygon& polygon, const std::string& source,
+                                               const std::string& field) {
+  return std::make_unique<PolygonModel>(polygon, source, field);
 }
 
 }  // namespace cisamr::geometry
