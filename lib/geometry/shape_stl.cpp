@@ -14,18 +14,63 @@ class StlModel final : public SurfaceModel {
   // non-manifold, self-intersecting or inconsistently oriented (naming the first bad face).
   StlModel(const Shape& shape, const std::string& source, const std::string& field);
 
-  int side(const Vec3& p) const override;
-  bool segment_events(const Vec3& a, const Vec3& b, const Box3& seg, EventSink& sink,
-                      std::vector<double>& scratch) const override;
-  double boundary_distance(const Vec3& p) const override;
-  bool boundary_touches(const Box3& box) const override;
-  double measure() const override;
-  void x_breakpoints(std::vector<double>& out) const override;
-  void y_breakpoints_at(double x, std::vector<double>& out) const override;
-  std::optional<bool> regions_intersect(const ShapeModel<3>& other, bool interiors, double depth_tol) const override;
-  void nearest_boundary_points(const Vec3& p, std::vector<Vec3>& out) const override;
+  int side(const Vec3& p) const override { return stl::side(mesh_, p); }
+
+  bool segment_events(const Vec3& a, const Vec3& b, const Box3&, EventSink& sink,
+                      std::vector<double>& ts) const override {
+    ts.clear();
+    stl::segment_hits(mesh_, a, b, ts);
+    return events_from_hits<3>(a, sub(b, a), ts, sink, [&](const Vec3& q) { return stl::side(mesh_, q) >= 0; });
+  }
+
+  double boundary_distance(const Vec3& p) const override { return stl::distance_to_surface(mesh_, p); }
+  bool boundary_touches(const Box3& box) const override { return stl::touches_box(mesh_, box); }
+  double measure() const override { return stl::volume(mesh_); }
+
+  void x_breakpoints(std::vector<double>& out) const override {
+    if (mesh_.vertices.size() <= 512)
+      for (const Vec3& v : mesh_.vertices) out.push_back(v[0]);
+  }
+
+  void y_breakpoints_at(double x, std::vector<double>& out) const override {
+    if (mesh_.faces.size() <= 4096) stl::edge_crossings_at_x(mesh_, x, out);
+  }
+
+  // Two meshes: an edge of one piercing the other (the oracle adds boundary samples).
+  std::optional<bool> regions_intersect(const ShapeModel<3>& other, bool, double) const override {
+    const auto* o = dynamic_cast<const StlModel*>(&other);
+    if (!o) return std::nullopt;
+    std::vector<double> ts;
+    const StlModel* pair[2] = {this, o};
+    for (int w = 0; w < 2; ++w) {
+      const stl::Mesh& m = pair[w]->mesh_;
+      const stl::Mesh& target = pair[1 - w]->mesh_;
+      for (const auto& f : m.faces)
+        for (int e = 0; e < 3; ++e) {
+          ts.clear();
+          stl::segment_hits(target, m.vertices[f[e]], m.vertices[f[(e + 1) % 3]], ts);
+          if (!ts.empty()) return true;
+        }
+    }
+    return std::nullopt;
+  }
+
+  void nearest_boundary_points(const Vec3&, std::vector<Vec3>& out) const override {
+    const std::vector<Vec3> samples = boundary_points(256);
+    out.insert(out.end(), samples.begin(), samples.end());
+  }
+
   // The vertices and face centroids (whatever per_axis).
-  std::vector<Vec3> boundary_points(int per_axis) const override;
+  std::vector<Vec3> boundary_points(int) const override {
+    std::vector<Vec3> pts = mesh_.vertices;
+    for (const auto& f : mesh_.faces) {
+      Vec3 c{};
+      for (int d = 0; d < 3; ++d)
+        c[d] = (mesh_.vertices[f[0]][d] + mesh_.vertices[f[1]][d] + mesh_.vertices[f[2]][d]) / 3;
+      pts.push_back(c);
+    }
+    return pts;
+  }
 
  private:
   stl::Mesh mesh_;
@@ -43,66 +88,7 @@ StlModel::StlModel(const Shape& shape, const std::string& src, const std::string
   box_ = mesh_.box;
 }
 
-int StlModel::side(const Vec3& p) const { return stl::side(mesh_, p); }
-
-bool StlModel::segment_events(const Vec3& a, const Vec3& b, const Box3&, EventSink& sink,
-                              std::vector<double>& ts) const {
-  ts.clear();
-  stl::segment_hits(mesh_, a, b, ts);
-  return events_from_hits<3>(a, sub(b, a), ts, sink, [&](const Vec3& q) { return stl::side(mesh_, q) >= 0; });
-}
-
-double StlModel::boundary_distance(const Vec3& p) const { return stl::distance_to_surface(mesh_, p); }
-
-bool StlModel::boundary_touches(const Box3& box) const { return stl::touches_box(mesh_, box); }
-
-double StlModel::measure() const { return stl::volume(mesh_); }
-
-void StlModel::x_breakpoints(std::vector<double>& out) const {
-  if (mesh_.vertices.size() <= 512)
-    for (const Vec3& v : mesh_.vertices) out.push_back(v[0]);
-}
-
-void StlModel::y_breakpoints_at(double x, std::vector<double>& out) const {
-  if (mesh_.faces.size() <= 4096) stl::edge_crossings_at_x(mesh_, x, out);
-}
-
-// Two meshes: an edge of one piercing the other (the oracle adds boundary samples).
-std::optional<bool> StlModel::regions_intersect(const ShapeModel<3>& other, bool, double) const {
-  const auto* o = dynamic_cast<const StlModel*>(&other);
-  if (!o) return std::nullopt;
-  std::vector<double> ts;
-  const StlModel* pair[2] = {this, o};
-  for (int w = 0; w < 2; ++w) {
-    const stl::Mesh& m = pair[w]->mesh_;
-    const stl::Mesh& target = pair[1 - w]->mesh_;
-    for (const auto& f : m.faces)
-      for (int e = 0; e < 3; ++e) {
-        ts.clear();
-        stl::segment_hits(target, m.vertices[f[e]], m.vertices[f[(e + 1) % 3]], ts);
-        if (!ts.empty()) return true;
-      }
-  }
-  return std::nullopt;
-}
-
-void StlModel::nearest_boundary_points(const Vec3&, std::vector<Vec3>& out) const {
-  const std::vector<Vec3> samples = boundary_points(256);
-  out.insert(out.end(), samples.begin(), samples.end());
-}
-
-std::vector<Vec3> StlModel::boundary_points(int) const {
-  std::vector<Vec3> pts = mesh_.vertices;
-  for (const auto& f : mesh_.faces) {
-    Vec3 c{};
-    for (int d = 0; d < 3; ++d) c[d] = (mesh_.vertices[f[0]][d] + mesh_.vertices[f[1]][d] + mesh_.vertices[f[2]][d]) / 3;
-    pts.push_back(c);
-  }
-  return pts;
-}
-
-std::unique_ptr<SurfaceModel> make_stl_model(const Shape& shape, const std::string& source,
-                                             const std::string& field) {
+std::unique_ptr<SurfaceModel> make_stl_model(const Shape& shape, const std::string& source, const std::string& field) {
   return std::make_unique<StlModel>(shape, source, field);
 }
 
