@@ -66,7 +66,15 @@ namespace {
 
 class CircleModel final : public CurveModel {
  public:
-  CircleModel(const Circle& c, const std::string& source, const std::string& field);
+  CircleModel(const Circle& c, const std::string& src, const std::string& field) {
+    if (!finite(c.center)) throw InputError(src, field + ".center", "must be finite");
+    if (!(c.radius > 0) || !std::isfinite(c.radius)) throw InputError(src, field + ".radius", "must be positive");
+    c_ = c.center;
+    r_ = c.radius;
+    // Slightly loose so that the box test never rejects a point on the circle.
+    const double r = r_ * (1 + 4 * kUnitRoundoff);
+    box_ = {{c_[0] - r, c_[1] - r}, {c_[0] + r, c_[1] + r}};
+  }
 
   int side(const Vec2& p) const override { return exact::circle_side(p, c_, r_); }
 
@@ -148,7 +156,20 @@ class CircleModel final : public CurveModel {
 // The ellipse as the unit circle in the frame u = ((x−c)·e1)/a, v = ((x−c)·e2)/b.
 class EllipseModel final : public CurveModel {
  public:
-  EllipseModel(const Ellipse& e, const std::string& source, const std::string& field);
+  EllipseModel(const Ellipse& e, const std::string& src, const std::string& field) {
+    if (!finite(e.center)) throw InputError(src, field + ".center", "must be finite");
+    if (!(e.semi_axes[0] > 0) || !(e.semi_axes[1] > 0) || !finite(e.semi_axes))
+      throw InputError(src, field + ".semi_axes", "must be positive");
+    if (!std::isfinite(e.angle)) throw InputError(src, field + ".angle", "must be finite");
+    c_ = e.center;
+    a_ = e.semi_axes[0];
+    b_ = e.semi_axes[1];
+    cs_ = std::cos(e.angle);
+    sn_ = std::sin(e.angle);
+    const double hx = std::hypot(a_ * cs_, b_ * sn_) * (1 + 1e-12) + 1e-300;
+    const double hy = std::hypot(a_ * sn_, b_ * cs_) * (1 + 1e-12) + 1e-300;
+    box_ = {{c_[0] - hx, c_[1] - hy}, {c_[0] + hx, c_[1] + hy}};
+  }
 
   int side(const Vec2& p) const override { return tolerant_side(p); }
 
@@ -252,31 +273,6 @@ class EllipseModel final : public CurveModel {
 };
 
 }  // namespace
-
-CircleModel::CircleModel(const Circle& c, const std::string& src, const std::string& field) {
-  if (!finite(c.center)) throw InputError(src, field + ".center", "must be finite");
-  if (!(c.radius > 0) || !std::isfinite(c.radius)) throw InputError(src, field + ".radius", "must be positive");
-  c_ = c.center;
-  r_ = c.radius;
-  // Slightly loose so that the box test never rejects a point on the circle.
-  const double r = r_ * (1 + 4 * kUnitRoundoff);
-  box_ = {{c_[0] - r, c_[1] - r}, {c_[0] + r, c_[1] + r}};
-}
-
-EllipseModel::EllipseModel(const Ellipse& e, const std::string& src, const std::string& field) {
-  if (!finite(e.center)) throw InputError(src, field + ".center", "must be finite");
-  if (!(e.semi_axes[0] > 0) || !(e.semi_axes[1] > 0) || !finite(e.semi_axes))
-    throw InputError(src, field + ".semi_axes", "must be positive");
-  if (!std::isfinite(e.angle)) throw InputError(src, field + ".angle", "must be finite");
-  c_ = e.center;
-  a_ = e.semi_axes[0];
-  b_ = e.semi_axes[1];
-  cs_ = std::cos(e.angle);
-  sn_ = std::sin(e.angle);
-  const double hx = std::hypot(a_ * cs_, b_ * sn_) * (1 + 1e-12) + 1e-300;
-  const double hy = std::hypot(a_ * sn_, b_ * cs_) * (1 + 1e-12) + 1e-300;
-  box_ = {{c_[0] - hx, c_[1] - hy}, {c_[0] + hx, c_[1] + hy}};
-}
 
 std::unique_ptr<CurveModel> make_circle_model(const Circle& circle, const std::string& source,
                                               const std::string& field) {

@@ -13,7 +13,25 @@ namespace {
 
 class CylinderModel final : public SurfaceModel {
  public:
-  CylinderModel(const Shape& shape, const std::string& source, const std::string& field);
+  CylinderModel(const Shape& shape, const std::string& src, const std::string& field) : SurfaceModel(shape) {
+    const Cylinder& c = std::get<Cylinder>(shape);
+    if (!finite(c.start)) throw InputError(src, field + ".start", "must be finite");
+    if (!finite(c.end)) throw InputError(src, field + ".end", "must be finite");
+    if (!(c.radius > 0) || !std::isfinite(c.radius)) throw InputError(src, field + ".radius", "must be positive");
+    const Vec3 ax = sub(c.end, c.start);
+    const double len = norm(ax);
+    if (!(len > 0)) throw InputError(src, field + ".end", "zero-length cylinder (end equals start)");
+    s_ = c.start;
+    e_ = c.end;
+    r_ = c.radius;
+    u_ = {ax[0] / len, ax[1] / len, ax[2] / len};
+    len_ = len;
+    for (int d = 0; d < 3; ++d) {
+      const double h = c.radius * std::sqrt(std::max(0.0, 1 - u_[d] * u_[d])) * (1 + 1e-12) + 1e-12 * (len + c.radius);
+      box_.min[d] = std::min(c.start[d], c.end[d]) - h;
+      box_.max[d] = std::max(c.start[d], c.end[d]) + h;
+    }
+  }
 
   int side(const Vec3& p) const override { return exact::cylinder_side(p, s_, e_, r_); }
 
@@ -137,27 +155,6 @@ class CylinderModel final : public SurfaceModel {
 };
 
 }  // namespace
-
-CylinderModel::CylinderModel(const Shape& shape, const std::string& src, const std::string& field)
-    : SurfaceModel(shape) {
-  const Cylinder& c = std::get<Cylinder>(shape);
-  if (!finite(c.start)) throw InputError(src, field + ".start", "must be finite");
-  if (!finite(c.end)) throw InputError(src, field + ".end", "must be finite");
-  if (!(c.radius > 0) || !std::isfinite(c.radius)) throw InputError(src, field + ".radius", "must be positive");
-  const Vec3 ax = sub(c.end, c.start);
-  const double len = norm(ax);
-  if (!(len > 0)) throw InputError(src, field + ".end", "zero-length cylinder (end equals start)");
-  s_ = c.start;
-  e_ = c.end;
-  r_ = c.radius;
-  u_ = {ax[0] / len, ax[1] / len, ax[2] / len};
-  len_ = len;
-  for (int d = 0; d < 3; ++d) {
-    const double h = c.radius * std::sqrt(std::max(0.0, 1 - u_[d] * u_[d])) * (1 + 1e-12) + 1e-12 * (len + c.radius);
-    box_.min[d] = std::min(c.start[d], c.end[d]) - h;
-    box_.max[d] = std::max(c.start[d], c.end[d]) + h;
-  }
-}
 
 std::unique_ptr<SurfaceModel> make_cylinder_model(const Shape& shape, const std::string& source,
                                                   const std::string& field) {

@@ -14,7 +14,14 @@ namespace {
 
 class NurbsCurveModel final : public CurveModel {
  public:
-  NurbsCurveModel(const NurbsCurve& c, const std::string& source, const std::string& field);
+  NurbsCurveModel(const NurbsCurve& c, const std::string& src, const std::string& field) {
+    const std::string problem = nurbs::build_region(c, region_);
+    if (!problem.empty()) {
+      const auto colon = problem.find(": ");
+      throw InputError(src, field + problem.substr(0, colon), problem.substr(colon + 2));
+    }
+    box_ = region_.box;
+  }
 
   int side(const Vec2& p) const override { return nurbs::side(region_, p); }
 
@@ -57,15 +64,6 @@ class NurbsCurveModel final : public CurveModel {
 };
 
 }  // namespace
-
-NurbsCurveModel::NurbsCurveModel(const NurbsCurve& c, const std::string& src, const std::string& field) {
-  const std::string problem = nurbs::build_region(c, region_);
-  if (!problem.empty()) {
-    const auto colon = problem.find(": ");
-    throw InputError(src, field + problem.substr(0, colon), problem.substr(colon + 2));
-  }
-  box_ = region_.box;
-}
 
 std::unique_ptr<CurveModel> make_nurbs_curve_model(const NurbsCurve& curve, const std::string& source,
                                                    const std::string& field) {

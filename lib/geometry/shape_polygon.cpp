@@ -28,7 +28,55 @@ class PolygonModel final : public CurveModel {
  public:
   // Drops repeated consecutive vertices; throws for < 3 distinct vertices, zero area or
   // self-intersection ("edges x and y").
-  PolygonModel(const Polygon& p, const std::string& source, const std::string& field);
+  PolygonModel(const Polygon& p, const std::string& src, const std::string& field) {
+    std::vector<Vec2>& v = v_;
+    for (const Vec2& q : p.vertices) {
+      if (!finite(q)) throw InputError(src, field + ".vertices", "coordinates must be finite");
+      if (v.empty() || v.back() != q) v.push_back(q);
+    }
+    while (v.size() > 1 && v.front() == v.back()) v.pop_back();
+    if (v.size() < 3) throw InputError(src, field + ".vertices", "a polygon needs at least 3 distinct vertices");
+    bool all_collinear = true;
+    for (std::size_t q = 2; q < v.size() && all_collinear; ++q)
+      all_collinear = exact::orientation(v[0], v[1], v[q]) == 0;
+    if (all_collinear) throw InputError(src, field + ".vertices", "polygon has zero area");
+    // Self-intersection: non-adjacent edges must not meet; adjacent ones only at their
+    // shared vertex. Box pairs first (Box_intersection_d), exact tests after.
+    const std::size_t n = v.size();
+    std::vector<Box2> eb(n);
+    for (std::size_t q = 0; q < n; ++q) {
+      const Vec2& u = v[q];
+      const Vec2& w = v[(q + 1) % n];
+      eb[q] = {{std::min(u[0], w[0]), std::min(u[1], w[1])}, {std::max(u[0], w[0]), std::max(u[1], w[1])}};
+    }
+    for (auto [ea, eb2] : overlapping_box_pairs(eb)) {
+      const std::size_t x = static_cast<std::size_t>(ea), y = static_cast<std::size_t>(eb2);
+      const Vec2 &p0 = v[x], &p1 = v[(x + 1) % n], &q0 = v[y], &q1 = v[(y + 1) % n];
+      bool bad;
+      if (y == x + 1 || (x == 0 && y == n - 1)) {
+        // Adjacent edges share one vertex; they are bad only when they fold back
+        // onto each other (collinear, both far ends on the same side).
+        const std::size_t sv = (y == x + 1) ? y : 0;
+        const Vec2& shared = v[sv];
+        const Vec2& e0 = v[(sv + n - 1) % n];
+        const Vec2& e1 = v[(sv + 1) % n];
+        bad = exact::orientation(e0, shared, e1) == 0 &&
+              ((e0[0] - shared[0]) * (e1[0] - shared[0]) > 0 || (e0[1] - shared[1]) * (e1[1] - shared[1]) > 0);
+      } else {
+        bad = exact::segments_intersect(p0, p1, q0, q1);
+      }
+      if (bad)
+        throw InputError(
+            src, field + ".vertices",
+            "polygon is self-intersecting (edges " + std::to_string(x) + " and " + std::to_string(y) + ")");
+    }
+    Box2 bb{{v[0][0], v[0][1]}, {v[0][0], v[0][1]}};
+    for (const Vec2& q : v) {
+      bb.min = {std::min(bb.min[0], q[0]), std::min(bb.min[1], q[1])};
+      bb.max = {std::max(bb.max[0], q[0]), std::max(bb.max[1], q[1])};
+    }
+    box_ = bb;
+  }
 
   int side(const Vec2& p) const override { return exact::polygon_side(v_, p); }
 
@@ -138,54 +186,6 @@ class PolygonModel final : public CurveModel {
 };
 
 }  // namespace
-
-PolygonModel::PolygonModel(const Polygon& p, const std::string& src, const std::string& field) {
-  std::vector<Vec2>& v = v_;
-  for (const Vec2& q : p.vertices) {
-    if (!finite(q)) throw InputError(src, field + ".vertices", "coordinates must be finite");
-    if (v.empty() || v.back() != q) v.push_back(q);
-  }
-  while (v.size() > 1 && v.front() == v.back()) v.pop_back();
-  if (v.size() < 3) throw InputError(src, field + ".vertices", "a polygon needs at least 3 distinct vertices");
-  bool all_collinear = true;
-  for (std::size_t q = 2; q < v.size() && all_collinear; ++q) all_collinear = exact::orientation(v[0], v[1], v[q]) == 0;
-  if (all_collinear) throw InputError(src, field + ".vertices", "polygon has zero area");
-  // Self-intersection: non-adjacent edges must not meet; adjacent ones only at their
-  // shared vertex. Box pairs first (Box_intersection_d), exact tests after.
-  const std::size_t n = v.size();
-  std::vector<Box2> eb(n);
-  for (std::size_t q = 0; q < n; ++q) {
-    const Vec2& u = v[q];
-    const Vec2& w = v[(q + 1) % n];
-    eb[q] = {{std::min(u[0], w[0]), std::min(u[1], w[1])}, {std::max(u[0], w[0]), std::max(u[1], w[1])}};
-  }
-  for (auto [ea, eb2] : overlapping_box_pairs(eb)) {
-    const std::size_t x = static_cast<std::size_t>(ea), y = static_cast<std::size_t>(eb2);
-    const Vec2 &p0 = v[x], &p1 = v[(x + 1) % n], &q0 = v[y], &q1 = v[(y + 1) % n];
-    bool bad;
-    if (y == x + 1 || (x == 0 && y == n - 1)) {
-      // Adjacent edges share one vertex; they are bad only when they fold back
-      // onto each other (collinear, both far ends on the same side).
-      const std::size_t sv = (y == x + 1) ? y : 0;
-      const Vec2& shared = v[sv];
-      const Vec2& e0 = v[(sv + n - 1) % n];
-      const Vec2& e1 = v[(sv + 1) % n];
-      bad = exact::orientation(e0, shared, e1) == 0 &&
-            ((e0[0] - shared[0]) * (e1[0] - shared[0]) > 0 || (e0[1] - shared[1]) * (e1[1] - shared[1]) > 0);
-    } else {
-      bad = exact::segments_intersect(p0, p1, q0, q1);
-    }
-    if (bad)
-      throw InputError(src, field + ".vertices",
-                       "polygon is self-intersecting (edges " + std::to_string(x) + " and " + std::to_string(y) + ")");
-  }
-  Box2 bb{{v[0][0], v[0][1]}, {v[0][0], v[0][1]}};
-  for (const Vec2& q : v) {
-    bb.min = {std::min(bb.min[0], q[0]), std::min(bb.min[1], q[1])};
-    bb.max = {std::max(bb.max[0], q[0]), std::max(bb.max[1], q[1])};
-  }
-  box_ = bb;
-}
 
 std::unique_ptr<CurveModel> make_polygon_model(const Polygon& polygon, const std::string& source,
                                                const std::string& field) {

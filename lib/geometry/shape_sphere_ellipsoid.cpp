@@ -51,7 +51,15 @@ namespace {
 
 class SphereModel final : public SurfaceModel {
  public:
-  SphereModel(const Shape& shape, const std::string& source, const std::string& field);
+  SphereModel(const Shape& shape, const std::string& src, const std::string& field) : SurfaceModel(shape) {
+    const Sphere& sp = std::get<Sphere>(shape);
+    if (!finite(sp.center)) throw InputError(src, field + ".center", "must be finite");
+    if (!(sp.radius > 0) || !std::isfinite(sp.radius)) throw InputError(src, field + ".radius", "must be positive");
+    c_ = sp.center;
+    r_ = sp.radius;
+    const double r = sp.radius * (1 + 4 * kUnitRoundoff);
+    for (int d = 0; d < 3; ++d) box_.min[d] = sp.center[d] - r, box_.max[d] = sp.center[d] + r;
+  }
 
   int side(const Vec3& p) const override { return exact::sphere_side(p, c_, r_); }
 
@@ -189,7 +197,21 @@ class SphereModel final : public SurfaceModel {
 // unit sphere.
 class EllipsoidModel final : public SurfaceModel {
  public:
-  EllipsoidModel(const Shape& shape, const std::string& source, const std::string& field);
+  EllipsoidModel(const Shape& shape, const std::string& src, const std::string& field) : SurfaceModel(shape) {
+    const Ellipsoid& e = std::get<Ellipsoid>(shape);
+    if (!finite(e.center)) throw InputError(src, field + ".center", "must be finite");
+    if (!(e.semi_axes[0] > 0) || !(e.semi_axes[1] > 0) || !(e.semi_axes[2] > 0) || !finite(e.semi_axes))
+      throw InputError(src, field + ".semi_axes", "must be positive");
+    if (!orthonormal(e.rotation)) throw InputError(src, field + ".rotation", "must be orthonormal");
+    c_ = e.center;
+    axis_ = e.semi_axes;
+    rot_ = e.rotation;
+    // Loose by rounding so that the box test never rejects a point ON the ellipsoid.
+    for (int d = 0; d < 3; ++d) {
+      const double h = ellipsoid_half_extent(e, d) * (1 + 1e-12) + 1e-300;
+      box_.min[d] = e.center[d] - h, box_.max[d] = e.center[d] + h;
+    }
+  }
 
   int side(const Vec3& p) const override { return tolerant_side(p); }
 
@@ -314,33 +336,6 @@ double ellipsoid_half_extent(const Ellipsoid& e, int d) {
   double h2 = 0;
   for (int j = 0; j < 3; ++j) h2 += (e.rotation[d][j] * e.semi_axes[j]) * (e.rotation[d][j] * e.semi_axes[j]);
   return std::sqrt(h2);
-}
-
-SphereModel::SphereModel(const Shape& shape, const std::string& src, const std::string& field) : SurfaceModel(shape) {
-  const Sphere& sp = std::get<Sphere>(shape);
-  if (!finite(sp.center)) throw InputError(src, field + ".center", "must be finite");
-  if (!(sp.radius > 0) || !std::isfinite(sp.radius)) throw InputError(src, field + ".radius", "must be positive");
-  c_ = sp.center;
-  r_ = sp.radius;
-  const double r = sp.radius * (1 + 4 * kUnitRoundoff);
-  for (int d = 0; d < 3; ++d) box_.min[d] = sp.center[d] - r, box_.max[d] = sp.center[d] + r;
-}
-
-EllipsoidModel::EllipsoidModel(const Shape& shape, const std::string& src, const std::string& field)
-    : SurfaceModel(shape) {
-  const Ellipsoid& e = std::get<Ellipsoid>(shape);
-  if (!finite(e.center)) throw InputError(src, field + ".center", "must be finite");
-  if (!(e.semi_axes[0] > 0) || !(e.semi_axes[1] > 0) || !(e.semi_axes[2] > 0) || !finite(e.semi_axes))
-    throw InputError(src, field + ".semi_axes", "must be positive");
-  if (!orthonormal(e.rotation)) throw InputError(src, field + ".rotation", "must be orthonormal");
-  c_ = e.center;
-  axis_ = e.semi_axes;
-  rot_ = e.rotation;
-  // Loose by rounding so that the box test never rejects a point ON the ellipsoid.
-  for (int d = 0; d < 3; ++d) {
-    const double h = ellipsoid_half_extent(e, d) * (1 + 1e-12) + 1e-300;
-    box_.min[d] = e.center[d] - h, box_.max[d] = e.center[d] + h;
-  }
 }
 
 std::unique_ptr<SurfaceModel> make_sphere_model(const Shape& shape, const std::string& source,

@@ -12,7 +12,15 @@ class StlModel final : public SurfaceModel {
  public:
   // Throws for a bad transform and, at field ".file", for a surface that is open,
   // non-manifold, self-intersecting or inconsistently oriented (naming the first bad face).
-  StlModel(const Shape& shape, const std::string& source, const std::string& field);
+  StlModel(const Shape& shape, const std::string& src, const std::string& field) : SurfaceModel(shape) {
+    const StlSurface& st = std::get<StlSurface>(shape);
+    if (!(st.scale > 0) || !std::isfinite(st.scale)) throw InputError(src, field + ".scale", "must be positive");
+    if (!orthonormal(st.rotation)) throw InputError(src, field + ".rotation", "must be orthonormal");
+    if (!finite(st.translate)) throw InputError(src, field + ".translate", "must be finite");
+    const std::string problem = stl::build(st, mesh_, true);
+    if (!problem.empty()) throw InputError(src, field + ".file", st.file + ": " + problem);
+    box_ = mesh_.box;
+  }
 
   int side(const Vec3& p) const override { return stl::side(mesh_, p); }
 
@@ -77,16 +85,6 @@ class StlModel final : public SurfaceModel {
 };
 
 }  // namespace
-
-StlModel::StlModel(const Shape& shape, const std::string& src, const std::string& field) : SurfaceModel(shape) {
-  const StlSurface& st = std::get<StlSurface>(shape);
-  if (!(st.scale > 0) || !std::isfinite(st.scale)) throw InputError(src, field + ".scale", "must be positive");
-  if (!orthonormal(st.rotation)) throw InputError(src, field + ".rotation", "must be orthonormal");
-  if (!finite(st.translate)) throw InputError(src, field + ".translate", "must be finite");
-  const std::string problem = stl::build(st, mesh_, true);
-  if (!problem.empty()) throw InputError(src, field + ".file", st.file + ": " + problem);
-  box_ = mesh_.box;
-}
 
 std::unique_ptr<SurfaceModel> make_stl_model(const Shape& shape, const std::string& source, const std::string& field) {
   return std::make_unique<StlModel>(shape, source, field);
