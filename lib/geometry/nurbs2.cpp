@@ -337,28 +337,27 @@ double gauss16(F&& f) {
   for (int i = 0; i < 8; ++i) s += w[i] * (f(0.5 - 0.5 * x[i]) + f(0.5 + 0.5 * x[i]));
   return 0.5 * s;
 }
+
+// Σ over the pieces of ∫₀¹ f(C(s), C'(s)) ds, 16-point Gauss–Legendre per piece.
+template <class F>
+double chain_integral(const Region& r, F&& f) {
+  double sum = 0;
+  for (const Piece& pc : r.pieces)
+    sum += gauss16([&](double s) {
+      Vec2 c, d;
+      eval(pc.hom.data(), r.degree, s, c, d);
+      return f(c, d);
+    });
+  return sum;
+}
 }  // namespace
 
 double area(const Region& r) {
-  double a = 0;
-  for (const Piece& pc : r.pieces)
-    a += gauss16([&](double s) {
-      Vec2 c, d;
-      eval(pc.hom.data(), r.degree, s, c, d);
-      return 0.5 * (c[0] * d[1] - c[1] * d[0]);
-    });
-  return std::abs(a);
+  return std::abs(chain_integral(r, [](const Vec2& c, const Vec2& d) { return 0.5 * (c[0] * d[1] - c[1] * d[0]); }));
 }
 
 double length(const Region& r) {
-  double l = 0;
-  for (const Piece& pc : r.pieces)
-    l += gauss16([&](double s) {
-      Vec2 c, d;
-      eval(pc.hom.data(), r.degree, s, c, d);
-      return std::hypot(d[0], d[1]);
-    });
-  return l;
+  return chain_integral(r, [](const Vec2&, const Vec2& d) { return std::hypot(d[0], d[1]); });
 }
 
 Vec2 point(const Piece& piece, int degree, double s) {

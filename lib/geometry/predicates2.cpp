@@ -10,6 +10,8 @@
 #include <cmath>
 #include <limits>
 
+#include "geometry/predicates_detail.hpp"
+
 namespace cisamr::geometry::exact {
 namespace {
 using K = CGAL::Exact_predicates_inexact_constructions_kernel;
@@ -29,24 +31,6 @@ NT circle_value(const Vec2& p, const Vec2& c, double r) {
   return rr * rr - (dx * dx + dy * dy);
 }
 
-// The five circle/segment terms (see circle_hits_from_signs) in NT.
-template <class NT>
-void circle_segment_terms(const Vec2& a, const Vec2& b, const Vec2& c, double r, NT out[5]) {
-  NT ex = NT(a[0]) - NT(c[0]), ey = NT(a[1]) - NT(c[1]);
-  NT fx = NT(b[0]) - NT(c[0]), fy = NT(b[1]) - NT(c[1]);
-  NT dx = NT(b[0]) - NT(a[0]), dy = NT(b[1]) - NT(a[1]);
-  NT rr = NT(r) * NT(r);
-  NT f0 = rr - (ex * ex + ey * ey);
-  NT f1 = rr - (fx * fx + fy * fy);
-  NT ed = ex * dx + ey * dy;
-  NT fd = fx * dx + fy * dy;
-  NT dd = dx * dx + dy * dy;
-  out[0] = f0;
-  out[1] = f1;
-  out[2] = ed;
-  out[3] = fd;
-  out[4] = ed * ed + dd * f0;
-}
 }  // namespace
 
 int orientation(const Vec2& a, const Vec2& b, const Vec2& c) {
@@ -153,23 +137,7 @@ CircleSegmentHits circle_hits_from_signs(int f0, int f1, int ed, int fd, int dis
 CircleSegmentHits circle_segment_hits(const Vec2& a, const Vec2& b, const Vec2& c, double r) {
   double v[5];
   int s[5];
-  bool exact_needed = false;
-  {
-    CGAL::Protect_FPU_rounding<true> guard;
-    CGAL::Interval_nt<false> iv[5];
-    circle_segment_terms(a, b, c, r, iv);
-    for (int i = 0; i < 5; ++i) {
-      if (iv[i].inf() > 0) s[i] = 1;
-      else if (iv[i].sup() < 0) s[i] = -1;
-      else if (iv[i].inf() == 0 && iv[i].sup() == 0) s[i] = 0;
-      else exact_needed = true;
-    }
-  }
-  if (exact_needed) {
-    CGAL::Mpzf ev[5];
-    circle_segment_terms(a, b, c, r, ev);
-    for (int i = 0; i < 5; ++i) s[i] = static_cast<int>(ev[i].sign());
-  }
+  detail::ball_segment_signs<2>(a, b, c, r, s);
   // Rounded values for the roots.
   const double ex = a[0] - c[0], ey = a[1] - c[1];
   const double dx = b[0] - a[0], dy = b[1] - a[1];

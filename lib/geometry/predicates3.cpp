@@ -10,6 +10,8 @@
 #include <cmath>
 #include <limits>
 
+#include "geometry/predicates_detail.hpp"
+
 namespace cisamr::geometry::exact {
 namespace {
 using K = CGAL::Exact_predicates_inexact_constructions_kernel;
@@ -19,23 +21,6 @@ constexpr double kTiny = std::numeric_limits<double>::min();
 
 K::Point_3 pt(const Vec3& v) { return K::Point_3(v[0], v[1], v[2]); }
 
-template <class NT>
-void sphere_segment_terms(const Vec3& a, const Vec3& b, const Vec3& c, double r, NT out[5]) {
-  NT f0 = NT(r) * NT(r), f1 = f0, ed = NT(0), fd = NT(0), dd = NT(0);
-  for (int k = 0; k < 3; ++k) {
-    NT e = NT(a[k]) - NT(c[k]), f = NT(b[k]) - NT(c[k]), d = NT(b[k]) - NT(a[k]);
-    f0 = f0 - e * e;
-    f1 = f1 - f * f;
-    ed = ed + e * d;
-    fd = fd + f * d;
-    dd = dd + d * d;
-  }
-  out[0] = f0;
-  out[1] = f1;
-  out[2] = ed;
-  out[3] = fd;
-  out[4] = ed * ed + dd * f0;
-}
 }  // namespace
 
 int orientation(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
@@ -77,23 +62,7 @@ int balls_side(const Vec3& c1, double r1, const Vec3& c2, double r2) {
 
 CircleSegmentHits sphere_segment_hits(const Vec3& a, const Vec3& b, const Vec3& c, double r) {
   int s[5];
-  bool exact_needed = false;
-  {
-    CGAL::Protect_FPU_rounding<true> guard;
-    CGAL::Interval_nt<false> iv[5];
-    sphere_segment_terms(a, b, c, r, iv);
-    for (int i = 0; i < 5; ++i) {
-      if (iv[i].inf() > 0) s[i] = 1;
-      else if (iv[i].sup() < 0) s[i] = -1;
-      else if (iv[i].inf() == 0 && iv[i].sup() == 0) s[i] = 0;
-      else exact_needed = true;
-    }
-  }
-  if (exact_needed) {
-    M ev[5];
-    sphere_segment_terms(a, b, c, r, ev);
-    for (int i = 0; i < 5; ++i) s[i] = static_cast<int>(ev[i].sign());
-  }
+  detail::ball_segment_signs<3>(a, b, c, r, s);
   double f0 = r * r, ed = 0, dd = 0;
   for (int k = 0; k < 3; ++k) {
     const double e = a[k] - c[k], d = b[k] - a[k];

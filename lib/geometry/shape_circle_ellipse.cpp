@@ -6,7 +6,6 @@
 
 #include "core/error.hpp"
 #include "geometry/box_tests.hpp"
-#include "geometry/shape_polygon.hpp"
 #include "geometry/shapes.hpp"
 
 namespace cisamr::geometry {
@@ -63,62 +62,70 @@ double ellipse_boundary_distance_local(double a, double b, double x, double y) {
 
 }  // namespace
 
-// ---------------------------------------------------------------- circle
-CircleModel::CircleModel(const Circle& c, const std::string& src, const std::string& field) {
-  if (!finite(c.center)) throw InputError(src, field + ".center", "must be finite");
-  if (!(c.radius > 0) || !std::isfinite(c.radius)) throw InputError(src, field + ".radius", "must be positive");
-  c_ = c.center;
-  r_ = c.radius;
-  // Slightly loose so that the box test never rejects a point on the circle.
-  const double r = r_ * (1 + 4 * kUnitRoundoff);
-  box_ = {{c_[0] - r, c_[1] - r}, {c_[0] + r, c_[1] + r}};
-}
+namespace {
 
-int CircleModel::side(const Vec2& p) const { return exact::circle_side(p, c_, r_); }
-
-bool CircleModel::segment_events(const Vec2& a, const Vec2& b, const Box2&, EventSink& sink,
-                                 std::vector<double>&) const {
-  return sink.push_hits(exact::circle_segment_hits(a, b, c_, r_));
-}
-
-double CircleModel::boundary_distance(const Vec2& p) const { return std::abs(std::hypot(p[0] - c_[0], p[1] - c_[1]) - r_); }
-
-bool CircleModel::boundary_touches(const Box2& box) const { return detail::sphere_meets_box<2>(c_, r_, box); }
-
-double CircleModel::measure() const { return M_PI * r_ * r_; }
-
-bool CircleModel::outward_normal(const Vec2& p, Vec2& n) const {
-  n = {p[0] - c_[0], p[1] - c_[1]};
-  return true;
-}
-
-std::optional<bool> CircleModel::regions_intersect(const ShapeModel<2>& other, bool interiors, double depth_tol) const {
-  const auto* q = dynamic_cast<const CircleModel*>(&other);
-  if (!q) return std::nullopt;
-  if (!interiors) return exact::disks_side(c_, r_, q->c_, q->r_) >= 0;
-  return std::hypot(q->c_[0] - c_[0], q->c_[1] - c_[1]) < r_ + q->r_ - depth_tol;
-}
-
-void CircleModel::nearest_boundary_points(const Vec2& p, std::vector<Vec2>& out) const {
-  // The distance along a circle is unimodal: one minimum.
-  const double dx = p[0] - c_[0], dy = p[1] - c_[1], n = std::hypot(dx, dy);
-  if (n == 0) out.push_back({c_[0] + r_, c_[1]});
-  else out.push_back({c_[0] + r_ * (dx / n), c_[1] + r_ * (dy / n)});
-}
-
-void CircleModel::boundary_meetings(const ShapeModel<2>& other, const Vec2& p, std::vector<Vec2>& out) const {
-  if (const auto* q = dynamic_cast<const CircleModel*>(&other)) {
-    const double dx = q->c_[0] - c_[0], dy = q->c_[1] - c_[1], d = std::hypot(dx, dy);
-    if (d == 0 || d > r_ + q->r_ || d < std::abs(r_ - q->r_)) return;
-    const double along = (r_ * r_ - q->r_ * q->r_ + d * d) / (2 * d);
-    const double h = std::sqrt(std::max(0.0, r_ * r_ - along * along));
-    const double ex = dx / d, ey = dy / d;
-    out.push_back({c_[0] + along * ex - h * ey, c_[1] + along * ey + h * ex});
-    out.push_back({c_[0] + along * ex + h * ey, c_[1] + along * ey - h * ex});
-    return;
+class CircleModel final : public CurveModel {
+ public:
+  CircleModel(const Circle& c, const std::string& src, const std::string& field) {
+    if (!finite(c.center)) throw InputError(src, field + ".center", "must be finite");
+    if (!(c.radius > 0) || !std::isfinite(c.radius)) throw InputError(src, field + ".radius", "must be positive");
+    c_ = c.center;
+    r_ = c.radius;
+    // Slightly loose so that the box test never rejects a point on the circle.
+    const double r = r_ * (1 + 4 * kUnitRoundoff);
+    box_ = {{c_[0] - r, c_[1] - r}, {c_[0] + r, c_[1] + r}};
   }
-  if (const auto* poly_model = dynamic_cast<const PolygonModel*>(&other)) {
-    auto poly = poly_model->vertices();
+
+  int side(const Vec2& p) const override { return exact::circle_side(p, c_, r_); }
+
+  bool segment_events(const Vec2& a, const Vec2& b, const Box2&, EventSink& sink, std::vector<double>&) const override {
+    return sink.push_hits(exact::circle_segment_hits(a, b, c_, r_));
+  }
+
+  double boundary_distance(const Vec2& p) const override {
+    return std::abs(std::hypot(p[0] - c_[0], p[1] - c_[1]) - r_);
+  }
+  bool boundary_touches(const Box2& box) const override { return detail::sphere_meets_box<2>(c_, r_, box); }
+  double measure() const override { return M_PI * r_ * r_; }
+
+  bool outward_normal(const Vec2& p, Vec2& n) const override {
+    n = {p[0] - c_[0], p[1] - c_[1]};
+    return true;
+  }
+
+  std::optional<bool> regions_intersect(const ShapeModel<2>& other, bool interiors, double depth_tol) const override {
+    const auto* q = dynamic_cast<const CircleModel*>(&other);
+    if (!q) return std::nullopt;
+    if (!interiors) return exact::disks_side(c_, r_, q->c_, q->r_) >= 0;
+    return std::hypot(q->c_[0] - c_[0], q->c_[1] - c_[1]) < r_ + q->r_ - depth_tol;
+  }
+
+  void nearest_boundary_points(const Vec2& p, std::vector<Vec2>& out) const override {
+    // The distance along a circle is unimodal: one minimum.
+    const double dx = p[0] - c_[0], dy = p[1] - c_[1], n = std::hypot(dx, dy);
+    if (n == 0) out.push_back({c_[0] + r_, c_[1]});
+    else out.push_back({c_[0] + r_ * (dx / n), c_[1] + r_ * (dy / n)});
+  }
+
+  void boundary_meetings(const ShapeModel<2>& other, const Vec2& p, std::vector<Vec2>& out) const override {
+    if (const auto* q = dynamic_cast<const CircleModel*>(&other)) {
+      const double dx = q->c_[0] - c_[0], dy = q->c_[1] - c_[1], d = std::hypot(dx, dy);
+      if (d == 0 || d > r_ + q->r_ || d < std::abs(r_ - q->r_)) return;
+      const double along = (r_ * r_ - q->r_ * q->r_ + d * d) / (2 * d);
+      const double h = std::sqrt(std::max(0.0, r_ * r_ - along * along));
+      const double ex = dx / d, ey = dy / d;
+      out.push_back({c_[0] + along * ex - h * ey, c_[1] + along * ey + h * ex});
+      out.push_back({c_[0] + along * ex + h * ey, c_[1] + along * ey - h * ex});
+      return;
+    }
+    if (const auto poly = static_cast<const CurveModel&>(other).polygon_vertices(); !poly.empty()) {
+      polygon_meetings(poly, out);
+      return;
+    }
+    CurveModel::boundary_meetings(other, p, out);
+  }
+
+  bool polygon_meetings(std::span<const Vec2> poly, std::vector<Vec2>& out) const override {
     for (std::size_t i = 0, i0 = poly.size() - 1; i < poly.size(); i0 = i++) {
       const Vec2& u = poly[i0];
       const Vec2& v = poly[i];
@@ -131,126 +138,150 @@ void CircleModel::boundary_meetings(const ShapeModel<2>& other, const Vec2& p, s
       for (double t : {(-B - sq) / A, (-B + sq) / A})
         if (t >= 0 && t <= 1) out.push_back({u[0] + t * ex, u[1] + t * ey});
     }
-    return;
+    return true;
   }
-  CurveModel::boundary_meetings(other, p, out);
-}
 
-Vec2 CircleModel::curve_point(int, double s) const {
-  const double th = 2 * M_PI * s;
-  return {c_[0] + r_ * std::cos(th), c_[1] + r_ * std::sin(th)};
-}
+  Vec2 curve_point(int, double s) const override {
+    const double th = 2 * M_PI * s;
+    return {c_[0] + r_ * std::cos(th), c_[1] + r_ * std::sin(th)};
+  }
 
-std::vector<Vec2> CircleModel::boundary_polyline() const { return polyline_of(Circle{c_, r_}); }
+  std::vector<Vec2> boundary_polyline() const override { return polyline_of(Circle{c_, r_}); }
 
-// ---------------------------------------------------------------- ellipse
-EllipseModel::EllipseModel(const Ellipse& e, const std::string& src, const std::string& field) {
-  if (!finite(e.center)) throw InputError(src, field + ".center", "must be finite");
-  if (!(e.semi_axes[0] > 0) || !(e.semi_axes[1] > 0) || !finite(e.semi_axes))
-    throw InputError(src, field + ".semi_axes", "must be positive");
-  if (!std::isfinite(e.angle)) throw InputError(src, field + ".angle", "must be finite");
-  c_ = e.center;
-  a_ = e.semi_axes[0];
-  b_ = e.semi_axes[1];
-  cs_ = std::cos(e.angle);
-  sn_ = std::sin(e.angle);
-  const double hx = std::hypot(a_ * cs_, b_ * sn_) * (1 + 1e-12) + 1e-300;
-  const double hy = std::hypot(a_ * sn_, b_ * cs_) * (1 + 1e-12) + 1e-300;
-  box_ = {{c_[0] - hx, c_[1] - hy}, {c_[0] + hx, c_[1] + hy}};
-}
+ private:
+  Vec2 c_;
+  double r_;
+};
 
-Vec2 EllipseModel::to_unit_frame(const Vec2& p) const {
-  const double dx = p[0] - c_[0], dy = p[1] - c_[1];
-  return {(dx * cs_ + dy * sn_) / a_, (-dx * sn_ + dy * cs_) / b_};
-}
+// The ellipse as the unit circle in the frame u = ((x−c)·e1)/a, v = ((x−c)·e2)/b.
+class EllipseModel final : public CurveModel {
+ public:
+  EllipseModel(const Ellipse& e, const std::string& src, const std::string& field) {
+    if (!finite(e.center)) throw InputError(src, field + ".center", "must be finite");
+    if (!(e.semi_axes[0] > 0) || !(e.semi_axes[1] > 0) || !finite(e.semi_axes))
+      throw InputError(src, field + ".semi_axes", "must be positive");
+    if (!std::isfinite(e.angle)) throw InputError(src, field + ".angle", "must be finite");
+    c_ = e.center;
+    a_ = e.semi_axes[0];
+    b_ = e.semi_axes[1];
+    cs_ = std::cos(e.angle);
+    sn_ = std::sin(e.angle);
+    const double hx = std::hypot(a_ * cs_, b_ * sn_) * (1 + 1e-12) + 1e-300;
+    const double hy = std::hypot(a_ * sn_, b_ * cs_) * (1 + 1e-12) + 1e-300;
+    box_ = {{c_[0] - hx, c_[1] - hy}, {c_[0] + hx, c_[1] + hy}};
+  }
 
-int EllipseModel::tolerant_side(const Vec2& p, double* f_out) const {
-  const double dx = p[0] - c_[0], dy = p[1] - c_[1];
-  const double u = (dx * cs_ + dy * sn_) / a_, v = (-dx * sn_ + dy * cs_) / b_;
-  const double q = u * u + v * v;
-  const double f = 1 - q;
-  // Each of u, v carries ≲ 6u relative error of (|dx|+|dy|)/axis; squares double it.
-  const double s = (std::abs(dx) + std::abs(dy));
-  const double bound = 32 * kUnitRoundoff * (1 + q + s * s / (a_ * a_) + s * s / (b_ * b_));
-  if (f_out) *f_out = std::abs(f) <= bound ? 0.0 : f;
-  if (f > bound) return 1;
-  if (f < -bound) return -1;
-  return 0;
-}
+  int side(const Vec2& p) const override { return tolerant_side(p); }
 
-int EllipseModel::side(const Vec2& p) const { return tolerant_side(p); }
+  bool segment_events(const Vec2& a, const Vec2& b, const Box2&, EventSink& sink, std::vector<double>&) const override {
+    // The unit-circle decision with the endpoint signs of the tolerant classification,
+    // so that nodes classified ON never get a crossing at t ≈ 0 or 1.
+    double f0, f1;
+    const int s0 = tolerant_side(a, &f0), s1 = tolerant_side(b, &f1);
+    const Vec2 ua = to_unit_frame(a), ub = to_unit_frame(b);
+    const double dx = ub[0] - ua[0], dy = ub[1] - ua[1];
+    const double dd = dx * dx + dy * dy;
+    if (dd == 0) return s0 > 0;
+    const double ed = ua[0] * dx + ua[1] * dy, fd = ub[0] * dx + ub[1] * dy;
+    const double disc = ed * ed + dd * f0;
+    auto sgn = [](double x) { return x > 0 ? 1 : (x < 0 ? -1 : 0); };
+    return sink.push_hits(exact::circle_hits_from_signs(s0, s1, sgn(ed), sgn(fd), sgn(disc), ed, dd, f0, disc));
+  }
 
-bool EllipseModel::segment_events(const Vec2& a, const Vec2& b, const Box2&, EventSink& sink,
-                                  std::vector<double>&) const {
-  // The unit-circle decision with the endpoint signs of the tolerant classification,
-  // so that nodes classified ON never get a crossing at t ≈ 0 or 1.
-  double f0, f1;
-  const int s0 = tolerant_side(a, &f0), s1 = tolerant_side(b, &f1);
-  const Vec2 ua = to_unit_frame(a), ub = to_unit_frame(b);
-  const double dx = ub[0] - ua[0], dy = ub[1] - ua[1];
-  const double dd = dx * dx + dy * dy;
-  if (dd == 0) return s0 > 0;
-  const double ed = ua[0] * dx + ua[1] * dy, fd = ub[0] * dx + ub[1] * dy;
-  const double disc = ed * ed + dd * f0;
-  auto sgn = [](double x) { return x > 0 ? 1 : (x < 0 ? -1 : 0); };
-  return sink.push_hits(exact::circle_hits_from_signs(s0, s1, sgn(ed), sgn(fd), sgn(disc), ed, dd, f0, disc));
-}
+  double boundary_distance(const Vec2& p) const override {
+    const double dx = p[0] - c_[0], dy = p[1] - c_[1];
+    return ellipse_boundary_distance_local(a_, b_, dx * cs_ + dy * sn_, -dx * sn_ + dy * cs_);
+  }
 
-double EllipseModel::boundary_distance(const Vec2& p) const {
-  const double dx = p[0] - c_[0], dy = p[1] - c_[1];
-  return ellipse_boundary_distance_local(a_, b_, dx * cs_ + dy * sn_, -dx * sn_ + dy * cs_);
-}
-
-bool EllipseModel::boundary_touches(const Box2& box) const {
-  // F(x) = u² + v² is convex: its max over the box is at a corner; its min is at the
-  // center when inside, else on one of the four edges (1D quadratic minimum).
-  auto q = [&](const Vec2& p) {
-    const Vec2 u = to_unit_frame(p);
-    return u[0] * u[0] + u[1] * u[1];
-  };
-  const Vec2 corners[4] = {{box.min[0], box.min[1]}, {box.max[0], box.min[1]},
-                           {box.max[0], box.max[1]}, {box.min[0], box.max[1]}};
-  double qmax = 0, qmin = std::numeric_limits<double>::infinity();
-  for (const Vec2& c : corners) qmax = std::max(qmax, q(c));
-  if (point_in_box(c_, box)) qmin = 0;
-  else {
-    for (int s = 0; s < 4; ++s) {
-      const Vec2& u = corners[s];
-      const Vec2& v = corners[(s + 1) % 4];
-      // q along the edge is a convex quadratic in t: minimise on [0,1].
-      const double q0 = q(u), q1 = q(v), qm = q(Vec2{0.5 * (u[0] + v[0]), 0.5 * (u[1] + v[1])});
-      const double A = 2 * q0 - 4 * qm + 2 * q1, B = -3 * q0 + 4 * qm - q1;
-      double best = std::min(q0, q1);
-      if (A > 0) {
-        const double t = -B / (2 * A);
-        if (t > 0 && t < 1) best = std::min(best, q0 + B * t + A * t * t);
+  bool boundary_touches(const Box2& box) const override {
+    // F(x) = u² + v² is convex: its max over the box is at a corner; its min is at the
+    // center when inside, else on one of the four edges (1D quadratic minimum).
+    auto q = [&](const Vec2& p) {
+      const Vec2 u = to_unit_frame(p);
+      return u[0] * u[0] + u[1] * u[1];
+    };
+    const Vec2 corners[4] = {
+        {box.min[0], box.min[1]}, {box.max[0], box.min[1]}, {box.max[0], box.max[1]}, {box.min[0], box.max[1]}};
+    double qmax = 0, qmin = std::numeric_limits<double>::infinity();
+    for (const Vec2& c : corners) qmax = std::max(qmax, q(c));
+    if (point_in_box(c_, box)) qmin = 0;
+    else {
+      for (int s = 0; s < 4; ++s) {
+        const Vec2& u = corners[s];
+        const Vec2& v = corners[(s + 1) % 4];
+        // q along the edge is a convex quadratic in t: minimise on [0,1].
+        const double q0 = q(u), q1 = q(v), qm = q(Vec2{0.5 * (u[0] + v[0]), 0.5 * (u[1] + v[1])});
+        const double A = 2 * q0 - 4 * qm + 2 * q1, B = -3 * q0 + 4 * qm - q1;
+        double best = std::min(q0, q1);
+        if (A > 0) {
+          const double t = -B / (2 * A);
+          if (t > 0 && t < 1) best = std::min(best, q0 + B * t + A * t * t);
+        }
+        qmin = std::min(qmin, best);
       }
-      qmin = std::min(qmin, best);
     }
+    return qmin <= 1 + 1e-9 && qmax >= 1 - 1e-9;
   }
-  return qmin <= 1 + 1e-9 && qmax >= 1 - 1e-9;
+
+  double measure() const override { return M_PI * a_ * b_; }
+
+  bool outward_normal(const Vec2& p, Vec2& n) const override {
+    const Vec2 u = to_unit_frame(p);
+    const double gx = u[0] / a_, gy = u[1] / b_;  // gradient in the body frame
+    n = {cs_ * gx - sn_ * gy, sn_ * gx + cs_ * gy};
+    return true;
+  }
+
+  void nearest_boundary_points(const Vec2& p, std::vector<Vec2>& out) const override {
+    sampled_nearest_points(p, 512, out);
+  }
+
+  Vec2 curve_point(int, double s) const override {
+    const double th = 2 * M_PI * s, x = a_ * std::cos(th), y = b_ * std::sin(th);
+    return {c_[0] + x * cs_ - y * sn_, c_[1] + x * sn_ + y * cs_};
+  }
+
+  std::vector<Vec2> boundary_polyline() const override {
+    return polyline_of(Ellipse{c_, {a_, b_}, std::atan2(sn_, cs_)});
+  }
+
+  int meeting_samples() const override { return 1024; }
+
+ private:
+  Vec2 to_unit_frame(const Vec2& p) const {
+    const double dx = p[0] - c_[0], dy = p[1] - c_[1];
+    return {(dx * cs_ + dy * sn_) / a_, (-dx * sn_ + dy * cs_) / b_};
+  }
+
+  // Tolerant side: F = 1 − u² − v², |F| below the rounding bound is ON (f_out: F or 0).
+  int tolerant_side(const Vec2& p, double* f_out = nullptr) const {
+    const double dx = p[0] - c_[0], dy = p[1] - c_[1];
+    const double u = (dx * cs_ + dy * sn_) / a_, v = (-dx * sn_ + dy * cs_) / b_;
+    const double q = u * u + v * v;
+    const double f = 1 - q;
+    // Each of u, v carries ≲ 6u relative error of (|dx|+|dy|)/axis; squares double it.
+    const double s = (std::abs(dx) + std::abs(dy));
+    const double bound = 32 * kUnitRoundoff * (1 + q + s * s / (a_ * a_) + s * s / (b_ * b_));
+    if (f_out) *f_out = std::abs(f) <= bound ? 0.0 : f;
+    if (f > bound) return 1;
+    if (f < -bound) return -1;
+    return 0;
+  }
+
+  Vec2 c_;
+  double a_, b_, cs_, sn_;
+};
+
+}  // namespace
+
+std::unique_ptr<CurveModel> make_circle_model(const Circle& circle, const std::string& source,
+                                              const std::string& field) {
+  return std::make_unique<CircleModel>(circle, source, field);
 }
 
-double EllipseModel::measure() const { return M_PI * a_ * b_; }
-
-bool EllipseModel::outward_normal(const Vec2& p, Vec2& n) const {
-  const Vec2 u = to_unit_frame(p);
-  const double gx = u[0] / a_, gy = u[1] / b_;  // gradient in the body frame
-  n = {cs_ * gx - sn_ * gy, sn_ * gx + cs_ * gy};
-  return true;
-}
-
-void EllipseModel::nearest_boundary_points(const Vec2& p, std::vector<Vec2>& out) const {
-  sampled_nearest_points(p, 512, out);
-}
-
-Vec2 EllipseModel::curve_point(int, double s) const {
-  const double th = 2 * M_PI * s, x = a_ * std::cos(th), y = b_ * std::sin(th);
-  return {c_[0] + x * cs_ - y * sn_, c_[1] + x * sn_ + y * cs_};
-}
-
-std::vector<Vec2> EllipseModel::boundary_polyline() const {
-  return polyline_of(Ellipse{c_, {a_, b_}, std::atan2(sn_, cs_)});
+std::unique_ptr<CurveModel> make_ellipse_model(const Ellipse& ellipse, const std::string& source,
+                                               const std::string& field) {
+  return std::make_unique<EllipseModel>(ellipse, source, field);
 }
 
 }  // namespace cisamr::geometry

@@ -10,6 +10,7 @@
 #include <limits>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
 #include <type_traits>
 #include <vector>
@@ -149,6 +150,11 @@ class CurveModel : public ShapeModel<2> {
   virtual std::vector<Vec2> boundary_polyline() const = 0;
   // Samples per piece when walking the boundary through another shape's classifier.
   virtual int meeting_samples() const { return 64; }
+  // A polygon's vertices (empty for curved families) and, for a family that can, the
+  // points where its boundary meets such a polygon: a circle and a polygon meet
+  // analytically whichever of the two is asked.
+  virtual std::span<const Vec2> polygon_vertices() const { return {}; }
+  virtual bool polygon_meetings(std::span<const Vec2> /*poly*/, std::vector<Vec2>& /*out*/) const { return false; }
   // Default: walk this boundary, bisect every sign change of other's classifier.
   void boundary_meetings(const ShapeModel<2>& other, const Vec2& p, std::vector<Vec2>& out) const override;
 
