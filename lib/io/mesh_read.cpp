@@ -719,7 +719,7 @@ LoadedMesh read_vtu(const std::string& path) {
     throw InputError(path, "", "offsets/types do not have NumberOfCells entries");
 
   raw.coords.resize(points->size());
-  if (!points->ascii && points->type->is_real && points->type->bytes == 8)
+  if (!points->ascii && points->type->is_real && points->type->bytes == 8 && points->size() > 0)
     std::memcpy(raw.coords.data(), points->bytes, 8 * points->size());
   else
     for (std::size_t i = 0; i < points->size(); ++i) raw.coords[i] = points->real(i);
