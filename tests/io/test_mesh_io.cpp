@@ -548,11 +548,21 @@ std::string small_vtu(const TempDir& dir) {
 
 TEST(MeshIo, AppendedSizeNear2To64IsRefusedNotFollowed) {
   TempDir dir;
-  std::string text = small_vtu(dir);
-  // The first appended block's UInt64 size: 2^64 - 8 wrapped the bounds check around.
-  const std::size_t block = text.find('_', text.find("<AppendedData")) + 1;
+  // The connectivity block's UInt64 size 2^64 - 8 wrapped the bounds check around; the
+  // offsets then sent the reader 4 GB past the mapped file (SIGSEGV).
+  std::string text = R"(<VTKFile type="UnstructuredGrid" byte_order="LittleEndian" header_type="UInt64">
+<UnstructuredGrid><Piece NumberOfPoints="3" NumberOfCells="2">
+<Points><DataArray type="Float64" NumberOfComponents="3" format="ascii">0 0 0 1 0 0 0 1 0</DataArray></Points>
+<Cells><DataArray type="Int32" Name="connectivity" format="appended" offset="0"/>
+<DataArray type="Int64" Name="offsets" format="ascii">999999997 1000000000</DataArray>
+<DataArray type="UInt8" Name="types" format="ascii">1 5</DataArray></Cells>
+</Piece></UnstructuredGrid>
+<AppendedData encoding="raw">_)";
   const std::uint64_t huge = ~std::uint64_t{0} - 7;
-  std::memcpy(text.data() + block, &huge, 8);
+  const std::int32_t nodes[3] = {0, 1, 2};
+  text.append(reinterpret_cast<const char*>(&huge), 8);
+  text.append(reinterpret_cast<const char*>(nodes), 12);
+  text += "\n</AppendedData></VTKFile>\n";
   EXPECT_NE(read_error(dir.write("wrap.vtu", text)).find("data beyond the end of the file"), std::string::npos);
 }
 
