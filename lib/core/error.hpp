@@ -20,9 +20,34 @@ class InputError : public std::runtime_error {
  private:
   static std::string format(const std::string& file, const std::string& field,
                             const std::string& problem) {
-    std::string s = file.empty() ? std::string("<input>") : file;
-    if (!field.empty()) s += ": " + field;
-    return s + ": " + problem;
+    std::string s = file.empty() ? std::string("<input>") : printable(file);
+    if (!field.empty()) s += ": " + printable(field);
+    return s + ": " + printable(problem);
+  }
+  // One line of valid UTF-8 whatever the input held: control characters and bytes that are
+  // not UTF-8 (a file name with a newline, bytes quoted from a binary file) become \n, \xNN.
+  static std::string printable(const std::string& text) {
+    static constexpr char kHex[] = "0123456789abcdef";
+    std::string out;
+    for (std::size_t i = 0; i < text.size();) {
+      const auto c = static_cast<unsigned char>(text[i]);
+      const std::size_t n = c < 0x80 ? 1 : (c >= 0xC2 && c <= 0xDF) ? 2 : (c >> 4) == 0xE ? 3
+                                          : (c >= 0xF0 && c <= 0xF4) ? 4 : 0;
+      bool valid = n > 0 && i + n <= text.size() && c >= 0x20 && c != 0x7F;
+      for (std::size_t k = 1; valid && k < n; ++k)
+        valid = (static_cast<unsigned char>(text[i + k]) & 0xC0) == 0x80;
+      if (valid) {
+        out.append(text, i, n);
+        i += n;
+        continue;
+      }
+      if (c == '\n') out += "\\n";
+      else if (c == '\t') out += "\\t";
+      else if (c == '\r') out += "\\r";
+      else out += {'\\', 'x', kHex[c >> 4], kHex[c & 15]};
+      ++i;
+    }
+    return out;
   }
   std::string file_, field_, problem_;
 };

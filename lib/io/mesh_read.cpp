@@ -150,6 +150,20 @@ class Scanner {
     if (t != word) fail_at(t, "expected '" + std::string(word) + "', got '" + std::string(t.substr(0, 40)) + "'");
   }
   std::size_t position() const { return pos_; }
+  // A count read from the file, checked against what is left of it before anything is
+  // reserved: each of its entries takes `values` tokens, each token at least 2 bytes.
+  std::size_t count(std::string_view what, long long values_per_entry) {
+    const std::string_view t = token();
+    long long n = 0;
+    const auto r = std::from_chars(t.data(), t.data() + t.size(), n);
+    if (r.ec != std::errc() || r.ptr != t.data() + t.size() || n < 0)
+      fail_at(t, "expected a count for " + std::string(what) + ", got '" + std::string(t.substr(0, 40)) + "'");
+    const std::size_t left = text_.size() - pos_;
+    const auto per_entry = static_cast<std::size_t>(std::max(1LL, values_per_entry));
+    if (static_cast<unsigned long long>(n) > left / (2 * per_entry))
+      fail_at(t, std::string(what) + " count " + std::string(t) + " is more than the rest of the file holds");
+    return static_cast<std::size_t>(n);
+  }
 
   [[noreturn]] void fail(const std::string& problem) const { fail_offset(pos_, problem); }
   [[noreturn]] void fail_at(std::string_view token, const std::string& problem) const {
@@ -262,12 +276,15 @@ struct TaggedCells {
       return;
     long long lo = cells[0].tag, hi = cells[0].tag;
     for (const Cell& c : cells) lo = std::min(lo, c.tag), hi = std::max(hi, c.tag);
-    if (hi - lo + 1 == static_cast<long long>(cells.size())) {
+    // Unsigned: tags may span the whole long long range.
+    const auto span = static_cast<unsigned long long>(hi) - static_cast<unsigned long long>(lo);
+    if (span == cells.size() - 1) {
       std::vector<Cell> placed(cells.size());
       std::vector<bool> filled(cells.size(), false);
       bool permutation = true;
       for (const Cell& c : cells) {
-        const auto at = static_cast<std::size_t>(c.tag - lo);
+        const auto at = static_cast<std::size_t>(static_cast<unsigned long long>(c.tag) -
+                                                 static_cast<unsigned long long>(lo));
         if (filled[at]) { permutation = false; break; }
         filled[at] = true;
         placed[at] = c;
@@ -327,6 +344,7 @@ LoadedMesh finish(RawMesh raw, const std::string& path) {
                                      " refers to node " + std::to_string(raw.cell_nodes[i]) +
                                      " of " + std::to_string(nodes));
   const std::size_t cells = raw.corners ? raw.cell_nodes.size() / static_cast<std::size_t>(raw.corners) : 0;
+  if (cells == 0) throw InputError(path, "", "no triangles or tetrahedra: not a mesh");
   if (raw.cell_phase.empty()) raw.cell_phase.assign(cells, 1);
   if (raw.cell_phase.size() != cells || (!raw.cell_partition.empty() && raw.cell_partition.size() != cells))
     throw InputError(path, "", "cell data do not match the number of cells");
@@ -421,6 +439,22 @@ XmlTag read_tag(std::string_view text, std::size_t start, const std::string& pat
 std::string attribute(const XmlTag& tag, const std::string& key, const std::string& fallback = "") {
   const auto it = tag.attributes.find(key);
   return it == tag.attributes.end() ? fallback : it->second;
+}
+
+// A size attribute (NumberOfPoints, offset): decimal digits only, at most `limit` (the
+// file's size: nothing in it can count or point beyond it).
+std::size_t size_attribute(const XmlTag& tag, const std::string& key, std::size_t limit,
+                           const std::string& path) {
+  const std::string text = attribute(tag, key, "0");
+  std::size_t value = 0;
+  const auto r = std::from_chars(text.data(), text.data() + text.size(), value);
+  if (text.empty() || text[0] == '-' || r.ec != std::errc() || r.ptr != text.data() + text.size())
+    throw InputError(path, "", "<" + tag.name + "> " + key + "=\"" + text.substr(0, 40) +
+                                   "\" is not a non-negative integer");
+  if (value > limit)
+    throw InputError(path, "", "<" + tag.name + "> " + key + "=\"" + text +
+                                   "\" is more than the file (" + std::to_string(limit) + " bytes) can hold");
+  return value;
 }
 
 struct VtkType {
@@ -532,6 +566,9 @@ void decode_base64_block(std::string_view text, std::size_t begin, std::size_t e
     throw InputError(path, "", "DataArray '" + name + "': truncated base64 header");
   const std::uint64_t size = header_bytes == 8 ? load<std::uint64_t>(bytes.data())
                                                : load<std::uint32_t>(bytes.data());
+  if (size > end - begin)  // base64 takes 4 characters for 3 bytes: checked before reserving
+    throw InputError(path, "", "DataArray '" + name + "': its header claims " + std::to_string(size) +
+                                   " bytes, more than its base64 text holds");
   // Decode only this array's groups: appended base64 runs straight into the next array.
   // A padded run that held exactly the header means two runs (VTK's writer); otherwise the
   // header and data share one run, which may already have ended inside the header groups.
@@ -600,8 +637,8 @@ LoadedMesh read_vtu(const std::string& path) {
     } else if (tag.name == "Piece") {
       if (seen_piece) throw InputError(path, "", "VTU files with several pieces are not supported");
       seen_piece = true;
-      number_of_points = std::stoull(attribute(tag, "NumberOfPoints", "0"));
-      number_of_cells = std::stoull(attribute(tag, "NumberOfCells", "0"));
+      number_of_points = size_attribute(tag, "NumberOfPoints", text.size(), path);
+      number_of_cells = size_attribute(tag, "NumberOfCells", text.size(), path);
     } else if (tag.name == "DataArray") {
       const std::string name = attribute(tag, "Name");
       const std::string type_name = attribute(tag, "type");
@@ -620,7 +657,7 @@ LoadedMesh read_vtu(const std::string& path) {
       if (format == "appended") {
         if (appended_start == std::string::npos)
           throw InputError(path, "", "DataArray '" + name + "' is appended but there is no AppendedData");
-        const std::size_t at = appended_start + std::stoull(attribute(tag, "offset", "0"));
+        const std::size_t at = appended_start + size_attribute(tag, "offset", text.size() - appended_start, path);
         if (appended_base64) {
           const std::size_t end = text.find('<', at);
           decode_base64_block(text, at, end == std::string::npos ? text.size() : end, header_bytes,
@@ -630,7 +667,8 @@ LoadedMesh read_vtu(const std::string& path) {
             throw InputError(path, "", "DataArray '" + name + "': offset beyond the end of the file");
           const auto* p = reinterpret_cast<const unsigned char*>(text.data() + at);
           const std::uint64_t size = header_bytes == 8 ? load<std::uint64_t>(p) : load<std::uint32_t>(p);
-          if (at + static_cast<std::size_t>(header_bytes) + size > text.size())
+          // Subtracted, not added: a size near 2^64 would wrap the sum around.
+          if (size > text.size() - at - static_cast<std::size_t>(header_bytes))
             throw InputError(path, "", "DataArray '" + name + "': data beyond the end of the file");
           set_binary(p + header_bytes, static_cast<std::size_t>(size), *type, values);
         }
@@ -673,12 +711,15 @@ LoadedMesh read_vtu(const std::string& path) {
   if (points->size() != 3 * number_of_points)
     throw InputError(path, "", "Points has " + std::to_string(points->size()) + " values, expected 3 × " +
                                    std::to_string(number_of_points));
-  if (types->is_real()) throw InputError(path, "", "the types array must be integers");
+  // Real values read as integers could be anything (NaN, 1e300): integer arrays only.
+  if (types->is_real() || connectivity->is_real() || offsets->is_real() || (phase && phase->is_real()) ||
+      (partition && partition->is_real()))
+    throw InputError(path, "", "connectivity, offsets, types, phase and partition must be integer arrays");
   if (types->size() != number_of_cells || offsets->size() != number_of_cells)
     throw InputError(path, "", "offsets/types do not have NumberOfCells entries");
 
   raw.coords.resize(points->size());
-  if (!points->ascii && points->type->is_real && points->type->bytes == 8)
+  if (!points->ascii && points->type->is_real && points->type->bytes == 8 && points->size() > 0)
     std::memcpy(raw.coords.data(), points->bytes, 8 * points->size());
   else
     for (std::size_t i = 0; i < points->size(); ++i) raw.coords[i] = points->real(i);
@@ -842,10 +883,11 @@ LoadedMesh read_msh(const std::string& path) {
     } else if (section == "$Nodes") {
       seen_nodes = true;
       if (v4) {
-        const long long blocks = s.integer(), total = s.integer();
+        const long long blocks = s.integer();
+        const auto total = static_cast<long long>(s.count("$Nodes", 4));  // a tag and 3 coordinates each
         s.integer(), s.integer();
-        node_tags.reserve(static_cast<std::size_t>(std::max(0LL, total)));
-        raw.coords.reserve(3 * static_cast<std::size_t>(std::max(0LL, total)));
+        node_tags.reserve(static_cast<std::size_t>(total));
+        raw.coords.reserve(3 * static_cast<std::size_t>(total));
         for (long long b = 0; b < blocks; ++b) {
           const long long entity_dim = s.integer();
           s.integer();  // entity tag
@@ -950,8 +992,26 @@ LoadedMesh read_medit(const std::string& path) {
       if (dimension != 2 && dimension != 3) s.fail("Dimension must be 2 or 3");
       continue;
     }
-    const long long count = s.integer();
-    if (count < 0) s.fail("negative count for " + std::string(keyword));
+    // Sections we skip, with the number of values per entry (-1: the dimension).
+    static const std::map<std::string, int> kSkipped = {
+        {"EDGES", 3},          {"CORNERS", 1},           {"REQUIREDVERTICES", 1},
+        {"RIDGES", 1},         {"REQUIREDEDGES", 1},     {"REQUIREDTRIANGLES", 1},
+        {"NORMALATVERTICES", 2}, {"TANGENTATVERTICES", 2}, {"NORMALATTRIANGLEVERTICES", 3},
+        {"NORMALS", -1},       {"TANGENTS", -1}};
+    static const std::map<std::string, int> kRejected = {
+        {"QUADRILATERALS", 5}, {"HEXAHEDRA", 9}, {"PRISMS", 7}, {"PYRAMIDS", 6}};
+    const auto skipped = kSkipped.find(word);
+    const auto rejected = kRejected.find(word);
+    if (word != "VERTICES" && word != "TRIANGLES" && word != "TETRAHEDRA" && skipped == kSkipped.end() &&
+        rejected == kRejected.end())
+      s.fail_at(keyword, "unknown Medit keyword '" + std::string(keyword.substr(0, 40)) + "'");
+    const int values_per_entry = word == "VERTICES"     ? dimension + 1
+                                 : word == "TRIANGLES"  ? 4
+                                 : word == "TETRAHEDRA" ? 5
+                                 : rejected != kRejected.end() ? rejected->second
+                                 : skipped->second < 0  ? dimension
+                                                        : skipped->second;
+    const long long count = static_cast<long long>(s.count(keyword.substr(0, 40), values_per_entry));
     if (word == "VERTICES") {
       if (dimension == 0) s.fail("Vertices before Dimension");
       raw.coords.reserve(3 * static_cast<std::size_t>(count));
@@ -968,26 +1028,11 @@ LoadedMesh read_medit(const std::string& path) {
         for (int k = 0; k < n; ++k) nodes[static_cast<std::size_t>(k)] = s.integer();
         list.push_back({i, static_cast<std::int32_t>(s.integer()), nodes});
       }
-    } else {
-      // Sections we skip, with the number of values per entry.
-      static const std::map<std::string, int> kSkipped = {
-          {"EDGES", 3},          {"CORNERS", 1},           {"REQUIREDVERTICES", 1},
-          {"RIDGES", 1},         {"REQUIREDEDGES", 1},     {"REQUIREDTRIANGLES", 1},
-          {"NORMALATVERTICES", 2}, {"TANGENTATVERTICES", 2}, {"NORMALATTRIANGLEVERTICES", 3},
-          {"NORMALS", -1},       {"TANGENTS", -1}};
-      static const std::map<std::string, int> kRejected = {
-          {"QUADRILATERALS", 5}, {"HEXAHEDRA", 9}, {"PRISMS", 7}, {"PYRAMIDS", 6}};
-      if (const auto it = kSkipped.find(word); it != kSkipped.end()) {
-        const int per_entry = it->second < 0 ? dimension : it->second;
-        for (long long i = 0; i < count * per_entry; ++i) s.token();
-      } else if (const auto rejected = kRejected.find(word); rejected != kRejected.end()) {
-        if (count > 0)
-          s.fail_at(keyword, "unsupported element type '" + std::string(keyword) +
-                                 "': only triangles and tetrahedra are read");
-        (void)rejected;
-      } else {
-        s.fail_at(keyword, "unknown Medit keyword '" + std::string(keyword.substr(0, 40)) + "'");
-      }
+    } else if (skipped != kSkipped.end()) {
+      for (long long i = 0; i < count * values_per_entry; ++i) s.token();
+    } else if (count > 0) {
+      s.fail_at(keyword, "unsupported element type '" + std::string(keyword) +
+                             "': only triangles and tetrahedra are read");
     }
   }
   if (!seen_version) throw InputError(path, "", "not a Medit mesh (it must start with MeshVersionFormatted)");

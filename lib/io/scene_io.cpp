@@ -9,10 +9,10 @@
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <set>
-#include <sstream>
 #include <string_view>
 
 #include "core/error.hpp"
+#include "core/input_file.hpp"
 #include "io/atomic_file.hpp"
 #include "io/stl_io.hpp"
 
@@ -27,6 +27,8 @@ constexpr int kMaxLevels = 20;
 constexpr std::size_t kMaxPhases = 64;  // PhaseMask has 64 bits
 constexpr double kDivisionTolerance = 1e-9;
 constexpr double kRotationTolerance = 1e-9;
+// Base grid cells (domain extent / h per axis, multiplied): 2^40, beyond any memory.
+constexpr double kMaxBaseCells = 1099511627776.0;
 
 // Shortest text that reads back to the same double.
 std::string number_text(double value) {
@@ -78,6 +80,12 @@ struct DuplicateKeyFinder {
   std::vector<Frame> stack;
   std::string duplicate_field;  // empty while none found
 
+  // Where the parser is: the field whose value is being read ("inclusions[2].radius").
+  std::string current_field() const {
+    std::string text;
+    for (const Frame& frame : stack) text = frame.is_object ? join(text, frame.key) : index(text, frame.index);
+    return text;
+  }
   std::string path() const {
     std::string text;
     for (std::size_t i = 0; i < stack.size(); ++i) {
@@ -120,9 +128,24 @@ struct DuplicateKeyFinder {
 std::string stl_file_problem(const std::string& file) {
   std::error_code ec;
   if (fs::is_directory(file, ec)) return "'" + file + "' is a directory";
+  // A FIFO would block the probe below and a device such as /dev/zero never ends.
+  if (fs::exists(file, ec) && !fs::is_regular_file(file, ec)) return "'" + file + "' is not a regular file";
   std::ifstream probe(file, std::ios::binary);
   if (!probe) return "cannot read '" + file + "': " + std::strerror(errno);
   return "";
+}
+
+// nlohmann's message without its prefix and without the bytes it quotes ("last read: ...",
+// which may be long or binary), at most 200 characters.
+std::string json_problem(const json::exception& e) {
+  std::string detail = e.what();
+  // "[json.exception.parse_error.101] parse error at line 1, column 2: syntax error ..."
+  if (const auto p = detail.find("] "); p != std::string::npos) detail = detail.substr(p + 2);
+  if (detail.rfind("parse error", 0) == 0)
+    if (const auto p = detail.find(": "); p != std::string::npos) detail = detail.substr(p + 2);
+  if (const auto p = detail.find("; last read"); p != std::string::npos) detail.resize(p);
+  if (detail.size() > 200) detail = detail.substr(0, 200) + "...";
+  return detail;
 }
 
 class SceneReader {
@@ -518,6 +541,7 @@ SceneDesc SceneReader::scene(const json& root) const {
   expect_object(mesh, "mesh");
   check_keys(mesh, "mesh", {"h", "levels"});
   s.h = positive(required(mesh, "mesh", "h"), "mesh.h");
+  double base_cells = 1;
   for (int d = 0; d < dim; ++d) {
     const double extent = s.domain_max[d] - s.domain_min[d];
     const double cells = std::round(extent / s.h);
@@ -525,7 +549,11 @@ SceneDesc SceneReader::scene(const json& root) const {
       fail("mesh.h", "h = " + number_text(s.h) + " does not divide the domain extent " +
                          number_text(extent) + " along " + kAxis[d] + " (ratio " +
                          number_text(extent / s.h) + ")");
+    base_cells *= cells;
   }
+  if (base_cells > kMaxBaseCells)  // before any grid is allocated
+    fail("mesh.h", "h = " + number_text(s.h) + " gives " + number_text(base_cells) +
+                       " base cells, more than the " + number_text(kMaxBaseCells) + " a mesh may have");
   if (const json* l = member(mesh, "levels"))
     s.levels = integer_in(*l, "mesh.levels", 0, kMaxLevels);
 
@@ -826,14 +854,11 @@ SceneDesc parse_scene(const std::string& json_text, const std::string& source, c
                        /*ignore_comments=*/false);
   } catch (const json::parse_error& e) {
     const auto [line, column] = line_and_column(json_text, e.byte);
-    std::string detail = e.what();
-    // "[json.exception.parse_error.101] parse error at line 1, column 2: syntax error ..."
-    if (const auto p = detail.find("] "); p != std::string::npos) detail = detail.substr(p + 2);
-    if (detail.rfind("parse error", 0) == 0)
-      if (const auto p = detail.find(": "); p != std::string::npos) detail = detail.substr(p + 2);
     throw InputError(source, "",
                      "invalid JSON at line " + std::to_string(line) + ", column " +
-                         std::to_string(column) + ": " + detail);
+                         std::to_string(column) + ": " + json_problem(e));
+  } catch (const json::exception& e) {  // a number beyond the double range (1e400)
+    throw InputError(source, duplicates.current_field(), "invalid JSON: " + json_problem(e));
   }
   if (!duplicates.duplicate_field.empty())
     throw InputError(source, duplicates.duplicate_field, "duplicate key");
@@ -864,15 +889,7 @@ std::int64_t load_stl_surfaces(SceneDesc& scene, std::span<const std::int32_t> i
 }
 
 SceneDesc read_scene(const std::string& path, const ReadSceneOptions& options) {
-  std::ifstream in(path, std::ios::binary);
-  std::error_code ec;
-  if (!in || fs::is_directory(path, ec))
-    throw InputError(path, "", std::string("cannot read: ") +
-                                   (in ? "is a directory" : std::strerror(errno)));
-  std::ostringstream buffer;
-  buffer << in.rdbuf();
-  if (in.bad()) throw InputError(path, "", "cannot read: I/O error");
-  return parse_scene(buffer.str(), path, options);
+  return parse_scene(read_input_file(path), path, options);
 }
 
 std::string scene_to_json(const SceneDesc& scene, const std::string& destination) {

@@ -1,16 +1,14 @@
 #include "io/stl_io.hpp"
 
 #include <algorithm>
-#include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
-#include <fstream>
-#include <sstream>
 #include <string_view>
 
 #include "core/error.hpp"
+#include "core/input_file.hpp"
 
 namespace cisamr::io {
 namespace {
@@ -21,10 +19,18 @@ class AsciiStl {
  public:
   AsciiStl(std::string_view text, const std::string& path) : text_(text), path_(path) {}
 
+  // Every solid of the file, one after the other (some tools write one per part).
   std::vector<StlTriangle> parse() {
+    std::vector<StlTriangle> triangles;
+    do parse_solid(triangles);
+    while (!at_end());
+    return triangles;
+  }
+
+ private:
+  void parse_solid(std::vector<StlTriangle>& triangles) {
     expect("solid");
     skip_line();  // the solid's name, possibly empty
-    std::vector<StlTriangle> triangles;
     while (true) {
       const std::string_view word = token();
       if (word == "endsolid") break;
@@ -42,10 +48,12 @@ class AsciiStl {
       expect("endfacet");
       triangles.push_back(t);
     }
-    return triangles;
+    skip_line();  // the name after endsolid
   }
-
- private:
+  bool at_end() {
+    while (pos_ < text_.size() && is_blank(text_[pos_])) ++pos_;
+    return pos_ >= text_.size();
+  }
   std::string_view token() {
     while (pos_ < text_.size() && is_blank(text_[pos_])) ++pos_;
     if (pos_ >= text_.size()) fail("unexpected end of file (no 'endsolid')");
@@ -83,12 +91,7 @@ class AsciiStl {
 }  // namespace
 
 std::vector<StlTriangle> read_stl(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path, "", std::string("cannot read: ") + std::strerror(errno));
-  std::ostringstream buffer;
-  buffer << in.rdbuf();
-  if (in.bad()) throw InputError(path, "", "cannot read: I/O error");
-  const std::string bytes = buffer.str();
+  const std::string bytes = read_input_file(path);
 
   std::vector<StlTriangle> triangles;
   std::uint32_t count = 0;

@@ -13,7 +13,9 @@ using StlTriangle = std::array<Vec3, 3>;
 
 // Triangles in the file's own coordinates. Binary files are recognised by their size
 // (84 + 50·n bytes), whatever their header says; anything else must be ASCII
-// ("solid ... facet normal ... outer loop vertex x y z ×3 endloop endfacet ... endsolid").
+// ("solid ... facet normal ... outer loop vertex x y z ×3 endloop endfacet ... endsolid",
+// possibly several solids one after the other: their triangles are all kept). Only regular
+// files are read (a FIFO or a device is an InputError, not a wait).
 // Throws InputError(path, "" or "line N", problem) for unreadable, malformed or empty files.
 std::vector<StlTriangle> read_stl(const std::string& path);
 

@@ -4,17 +4,22 @@
 #include <fstream>
 #include <set>
 #include <span>
-#include <sstream>
 
 #include <nlohmann/json.hpp>
 
 #include "core/error.hpp"
+#include "core/input_file.hpp"
 #include "pack/pack.hpp"
 
 namespace cisamr::pack {
 namespace {
 
 using nlohmann::json;
+
+// What a spec may ask for, so that a typo cannot make the packer run for days or exhaust
+// memory: placement trials per particle, particles per population.
+constexpr std::int64_t kMaxTrials = 1'000'000'000;
+constexpr std::int64_t kMaxCount = 100'000'000;
 
 struct Reader {
   std::string source;
@@ -148,8 +153,14 @@ PackSpec parse_pack_spec(const std::string& text, const std::string& source) {
   json doc;
   try {
     doc = json::parse(text);
-  } catch (const json::parse_error& e) {
-    r.fail("", std::string("not valid JSON: ") + e.what());
+  } catch (const json::exception& e) {  // syntax, or a number beyond the double range (1e400)
+    // Without nlohmann's prefix and the bytes it quotes ("last read: ..."): they may be
+    // long or binary.
+    std::string detail = e.what();
+    if (const auto p = detail.find("] "); p != std::string::npos) detail = detail.substr(p + 2);
+    if (const auto p = detail.find("; last read"); p != std::string::npos) detail.resize(p);
+    if (detail.size() > 200) detail = detail.substr(0, 200) + "...";
+    r.fail("", "not valid JSON: " + detail);
   }
   r.only_keys(doc, "", {"format", "dimension", "seed", "domain", "mesh", "phases", "matrix_phase",
                         "max_trials", "max_failures", "populations", "description"});
@@ -224,7 +235,8 @@ PackSpec parse_pack_spec(const std::string& text, const std::string& source) {
   if (!has_phase(spec.matrix_phase)) r.fail("matrix_phase", "no phase with this id");
   if (doc.contains("max_trials")) {
     spec.max_trials = r.integer(doc["max_trials"], "max_trials");
-    if (spec.max_trials < 1) r.fail("max_trials", "must be ≥ 1");
+    if (spec.max_trials < 1 || spec.max_trials > kMaxTrials)
+      r.fail("max_trials", "must be between 1 and " + std::to_string(kMaxTrials));
   }
   if (doc.contains("max_failures")) {
     spec.max_failures = r.integer(doc["max_failures"], "max_failures");
@@ -255,7 +267,8 @@ PackSpec parse_pack_spec(const std::string& text, const std::string& source) {
     }
     if (pj.contains("count")) {
       p.count = r.integer(pj["count"], f + ".count");
-      if (*p.count < 0) r.fail(f + ".count", "must be ≥ 0");
+      if (*p.count < 0 || *p.count > kMaxCount)
+        r.fail(f + ".count", "must be between 0 and " + std::to_string(kMaxCount));
     }
     if (pj.contains("volume_fraction")) {
       p.volume_fraction = r.number(pj["volume_fraction"], f + ".volume_fraction");
@@ -352,6 +365,9 @@ PackSpec parse_pack_spec(const std::string& text, const std::string& source) {
       std::filesystem::path file = r.string(pj["file"], f + ".file");
       if (file.is_relative()) file = base / file;
       p.file = file.string();
+      // Checked without opening: a FIFO would block, /dev/zero never ends.
+      if (const std::string problem = input_file_problem(p.file); !problem.empty())
+        r.fail(f + ".file", "\"" + p.file + "\": " + problem);
       std::ifstream probe(p.file, std::ios::binary);
       if (!probe) r.fail(f + ".file", "cannot open \"" + p.file + "\"");
     }
@@ -361,11 +377,7 @@ PackSpec parse_pack_spec(const std::string& text, const std::string& source) {
 }
 
 PackSpec read_pack_spec(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path, "", "cannot open the file");
-  std::ostringstream s;
-  s << in.rdbuf();
-  return parse_pack_spec(s.str(), path);
+  return parse_pack_spec(read_input_file(path), path);
 }
 
 }  // namespace cisamr::pack

@@ -533,5 +533,109 @@ TEST(MeshIo, UnsupportedContentIsInputError) {
                     "line 2: expected a number, got 'zero'");
 }
 
+// ---- input that must be refused, not followed (found by fuzzing) ----
+
+std::string read_error(const std::string& path) {
+  try {
+    read_mesh(path);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+// Our own 2D VTU (raw appended, UInt64 headers) of two triangles.
+std::string small_vtu(const TempDir& dir) {
+  mesh::Mesh2 m;
+  m.coords = {0, 0, 1, 0, 0, 1, 1, 1};
+  m.cell_nodes = {0, 1, 2, 1, 3, 2};
+  m.cell_phase = {1, 1};
+  const std::string path = dir.file("small.vtu");
+  write_mesh(path, m, {{1, "matrix", false}});
+  return read_text(path);
+}
+
+TEST(MeshIo, AppendedSizeNear2To64IsRefusedNotFollowed) {
+  TempDir dir;
+  // The connectivity block's UInt64 size 2^64 - 8 wrapped the bounds check around; the
+  // offsets then sent the reader 4 GB past the mapped file (SIGSEGV).
+  std::string text = R"(<VTKFile type="UnstructuredGrid" byte_order="LittleEndian" header_type="UInt64">
+<UnstructuredGrid><Piece NumberOfPoints="3" NumberOfCells="2">
+<Points><DataArray type="Float64" NumberOfComponents="3" format="ascii">0 0 0 1 0 0 0 1 0</DataArray></Points>
+<Cells><DataArray type="Int32" Name="connectivity" format="appended" offset="0"/>
+<DataArray type="Int64" Name="offsets" format="ascii">999999997 1000000000</DataArray>
+<DataArray type="UInt8" Name="types" format="ascii">1 5</DataArray></Cells>
+</Piece></UnstructuredGrid>
+<AppendedData encoding="raw">_)";
+  const std::uint64_t huge = ~std::uint64_t{0} - 7;
+  const std::int32_t nodes[3] = {0, 1, 2};
+  text.append(reinterpret_cast<const char*>(&huge), 8);
+  text.append(reinterpret_cast<const char*>(nodes), 12);
+  text += "\n</AppendedData></VTKFile>\n";
+  EXPECT_NE(read_error(dir.write("wrap.vtu", text)).find("data beyond the end of the file"), std::string::npos);
+}
+
+TEST(MeshIo, VtuSizeAttributesAreCheckedNumbers) {
+  TempDir dir;
+  const std::string text = small_vtu(dir);
+  for (const std::string& bad : {"x", "", "-1", "99999999999999999999", "18446744073709551615", "1000000"}) {
+    std::string points = text, offset = text;
+    points.replace(points.find("NumberOfPoints=\"4\""), 18, "NumberOfPoints=\"" + bad + "\"");
+    const std::string first = read_error(dir.write("p.vtu", points));
+    EXPECT_NE(first.find("NumberOfPoints"), std::string::npos) << bad << ": " << first;
+    const std::size_t at = offset.find("offset=\"0\"");
+    ASSERT_NE(at, std::string::npos);
+    offset.replace(at, 10, "offset=\"" + bad + "\"");
+    const std::string second = read_error(dir.write("o.vtu", offset));
+    EXPECT_NE(second.find("offset"), std::string::npos) << bad << ": " << second;
+  }
+}
+
+TEST(MeshIo, CountsBeyondTheFileAreRefusedBeforeAllocating) {
+  TempDir dir;
+  EXPECT_NE(read_error(dir.write("v.mesh", "MeshVersionFormatted 2\nDimension 3\nVertices\n1000000000000000000\n0 0 0 0\n"))
+                .find("Vertices count 1000000000000000000 is more than the rest of the file holds"),
+            std::string::npos);
+  EXPECT_NE(read_error(dir.write("n.msh", "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 1000000000000000000 1 1\n"))
+                .find("$Nodes count"),
+            std::string::npos);
+}
+
+TEST(MeshIo, FilesWithoutCellsAreNotMeshes) {
+  TempDir dir;
+  for (const auto& [name, text] : std::vector<std::pair<std::string, std::string>>{
+           {"empty.inp", ""},
+           {"text.inp", "just some text\n"},
+           {"dim.mesh", "MeshVersionFormatted 2\nDimension 3\nEnd\n"},
+           {"none.msh", "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n1\n1 0 0 0\n$EndNodes\n$Elements\n0\n$EndElements\n"}}) {
+    EXPECT_NE(read_error(dir.write(name, text)).find("no triangles or tetrahedra"), std::string::npos) << name;
+  }
+}
+
+TEST(MeshIo, ExtremeElementTagsSortWithoutOverflow) {
+  TempDir dir;
+  const LoadedMesh l = read_mesh(dir.write("tags.inp", R"(*NODE
+1, 0, 0
+2, 1, 0
+3, 0, 1
+4, 1, 1
+*ELEMENT, TYPE=CPS3
+9223372036854775807, 2, 4, 3
+-9223372036854775808, 1, 2, 3
+)"));
+  EXPECT_EQ(l.mesh2.cell_nodes, (std::vector<LocalId>{0, 1, 2, 1, 3, 2}));
+}
+
+TEST(MeshIo, RealConnectivityIsRefused) {
+  TempDir dir;
+  const std::string what = read_error(dir.write("r.vtu", R"(<VTKFile type="UnstructuredGrid"><UnstructuredGrid><Piece NumberOfPoints="3" NumberOfCells="1">
+<Points><DataArray type="Float64" NumberOfComponents="3" format="ascii">0 0 0 1 0 0 0 1 0</DataArray></Points>
+<Cells><DataArray type="Float64" Name="connectivity" format="ascii">0 1 1e300</DataArray>
+<DataArray type="Int32" Name="offsets" format="ascii">3</DataArray>
+<DataArray type="UInt8" Name="types" format="ascii">5</DataArray></Cells>
+</Piece></UnstructuredGrid></VTKFile>)"));
+  EXPECT_NE(what.find("must be integer arrays"), std::string::npos) << what;
+}
+
 }  // namespace
 }  // namespace cisamr::io

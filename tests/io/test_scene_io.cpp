@@ -5,7 +5,10 @@
 #include <bit>
 #include <cmath>
 
+#include <sys/stat.h>
+
 #include "core/error.hpp"
+#include "io/stl_io.hpp"
 #include "temp_dir.hpp"
 
 namespace cisamr::io {
@@ -433,6 +436,68 @@ TEST(SceneIo, UnreadableFileIsInputError) {
 TEST(SceneIo, IntegralFloatsAreAcceptedAsIntegers) {
   const SceneDesc s = parse_scene(scene2(kCircle, R"(, "matrix_phase": 1.0)"), "");
   EXPECT_EQ(s.matrix_phase, 1);
+}
+
+// ---- input that must be refused, not followed (found by fuzzing) ----
+
+InputError scene_error(const std::string& json, const std::string& source = "s.json") {
+  try {
+    parse_scene(json, source);
+  } catch (const InputError& e) {
+    return e;
+  }
+  return InputError(source, "", "no error");
+}
+
+TEST(SceneIo, NumbersBeyondTheDoubleRangeNameTheField) {
+  const InputError e = scene_error(scene2(R"({"shape": "circle", "center": [0.5, 0.5], "radius": 1e400})"));
+  EXPECT_EQ(e.field(), "inclusions[0].radius") << e.what();
+  EXPECT_NE(e.problem().find("number overflow"), std::string::npos) << e.what();
+  EXPECT_EQ(scene_error(scene2(kCircle, R"(, "matrix_phase": -1e999)")).field(), "matrix_phase");
+}
+
+TEST(SceneIo, ErrorsAreOneLineOfText) {
+  // nlohmann quotes what it last read: binary bytes, control characters, a long run.
+  for (const std::string& json : {std::string("{\"format\": \x01\xff}"), std::string(9000, '[') + "x",
+                                  std::string("{\"a\n\tb\": 1}")}) {
+    const std::string what = scene_error(json, "dir/line\nbreak.json").what();
+    EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+    EXPECT_EQ(what.find('\t'), std::string::npos) << what;
+    EXPECT_EQ(what.find('\x01'), std::string::npos) << what;
+    EXPECT_EQ(what.find('\xff'), std::string::npos) << what;
+    EXPECT_LT(what.size(), 400u) << what;
+    EXPECT_EQ(what.rfind("dir/line\\nbreak.json: ", 0), 0u) << what;
+  }
+}
+
+TEST(SceneIo, BaseCellsAreBoundedBeforeAnyGrid) {
+  const InputError e = scene_error(R"({"format": "cisamr-scene/1", "dimension": 3,
+      "domain": {"min": [0, 0, 0], "max": [1e6, 1e6, 1e6]}, "mesh": {"h": 0.5}, "inclusions": []})");
+  EXPECT_EQ(e.field(), "mesh.h") << e.what();
+  EXPECT_NE(e.problem().find("base cells"), std::string::npos) << e.what();
+}
+
+TEST(SceneIo, NonRegularFilesAreRefusedNotRead) {
+  TempDir dir;
+  const std::string fifo = dir.file("pipe");
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  // A FIFO blocks until a writer comes and /dev/zero never ends: both must fail at once.
+  for (const std::string& file : {fifo, std::string("/dev/zero"), dir.path().string()}) {
+    try {
+      read_scene(file);
+      ADD_FAILURE() << file;
+    } catch (const InputError& e) {
+      EXPECT_NE(e.problem().find("cannot read"), std::string::npos) << e.what();
+    }
+    const std::string scene = dir.write("stl.json", scene3(R"({"shape": "stl", "file": ")" + file + R"("})"));
+    try {
+      read_scene(scene);
+      ADD_FAILURE() << file;
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.field(), "inclusions[0].file") << e.what();
+    }
+    EXPECT_THROW(read_stl(file), InputError) << file;
+  }
 }
 
 }  // namespace

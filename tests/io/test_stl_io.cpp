@@ -61,5 +61,20 @@ TEST(StlIo, BadFilesAreInputErrors) {
   EXPECT_THROW(read_stl(dir.write("short.stl", truncated)), InputError);
 }
 
+TEST(StlIo, ReadsEverySolidOfAnAsciiFile) {
+  TempDir dir;
+  const std::string facet = "facet normal 0 0 1\nouter loop\nvertex 0 0 Z\nvertex 1 0 Z\nvertex 0 1 Z\nendloop\nendfacet\n";
+  auto at = [&](const char* z) {
+    std::string f = facet;
+    for (std::size_t p; (p = f.find('Z')) != std::string::npos;) f.replace(p, 1, z);
+    return f;
+  };
+  const auto triangles = read_stl(dir.write("two.stl", "solid a\n" + at("0") + "endsolid a\nsolid b\n" + at("2") +
+                                                           at("3") + "endsolid b\n"));
+  ASSERT_EQ(triangles.size(), 3u);  // the first solid alone was kept before
+  EXPECT_EQ(triangles[2][0], (Vec3{0, 0, 3}));
+  EXPECT_THROW(read_stl(dir.write("junk.stl", "solid a\n" + at("0") + "endsolid a\ngarbage\n")), InputError);
+}
+
 }  // namespace
 }  // namespace cisamr::io

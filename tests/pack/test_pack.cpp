@@ -8,6 +8,9 @@
 #include <fstream>
 #include <string>
 
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include "core/error.hpp"
 #include "io/scene_io.hpp"
 #include "pack/convex.hpp"
@@ -354,4 +357,64 @@ TEST(PackErrors, BadFieldsAreNamed) {
       "mesh": {"h": 3}, "populations": [{"shape": "circle", "count": 1, "size": 1}]})"), "mesh.h");
   EXPECT_EQ(field_of(spec2d(R"({"shape": "circle", "count": 3000, "size": 2.0})", "", R"("max_trials": 50, "max_failures": 5, )")),
             "populations[0].count");
+}
+
+// ---- input that must be refused, not followed (found by fuzzing) ----
+
+namespace {
+
+std::string problem_of(const std::string& json) {
+  try {
+    pack::parse_pack_spec(json, "test.json");
+  } catch (const InputError& e) {
+    return std::string(e.what());
+  }
+  return "no error";
+}
+
+}  // namespace
+
+TEST(PackSpec, NumbersBeyondTheDoubleRangeAreInputErrors) {
+  const std::string what = problem_of(spec2d(R"({"shape": "circle", "count": 3, "size": 1e400})"));
+  EXPECT_NE(what.find("not valid JSON: number overflow"), std::string::npos) << what;
+}
+
+TEST(PackSpec, JsonErrorsDoNotEchoRawBytes) {
+  const std::string what = problem_of(std::string(9000, '[') + "\x01\xff");
+  EXPECT_EQ(what.find('\x01'), std::string::npos) << what;
+  EXPECT_EQ(what.find('\xff'), std::string::npos) << what;
+  EXPECT_LT(what.size(), 400u) << what;
+}
+
+TEST(PackSpec, TrialsAndCountsAreBounded) {
+  EXPECT_NE(problem_of(spec2d(R"({"shape": "circle", "count": 3, "size": 1})", "", R"("max_trials": 1000000000000, )"))
+                .find("max_trials: must be between 1 and"),
+            std::string::npos);
+  EXPECT_NE(problem_of(spec2d(R"({"shape": "circle", "count": 1000000000000, "size": 1})")).find("count: must be between 0 and"),
+            std::string::npos);
+}
+
+TEST(PackSpec, NonRegularFilesAreRefusedWithoutOpening) {
+  const auto dir = std::filesystem::temp_directory_path() / ("cisamr_pack_fifo_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string fifo = (dir / "pipe").string();
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  // Opening a FIFO for reading blocks until a writer comes: these must fail at once.
+  for (const std::string& file : {fifo, std::string("/dev/zero"), dir.string()}) {
+    try {
+      pack::read_pack_spec(file);
+      ADD_FAILURE() << file;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("cannot read"), std::string::npos) << e.what();
+    }
+    const std::string spec = R"({"format": "cisamr-pack/1", "dimension": 3, "domain": {"min": [0, 0, 0], "max": [1, 1, 1]},
+        "mesh": {"h": 0.5}, "populations": [{"shape": "stl", "count": 1, "size": 0.2, "file": ")" + file + R"("}]})";
+    try {
+      pack::parse_pack_spec(spec, "test.json");
+      ADD_FAILURE() << file;
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.field(), "populations[0].file") << e.what();
+    }
+  }
+  std::filesystem::remove_all(dir);
 }
