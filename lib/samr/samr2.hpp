@@ -48,8 +48,8 @@ struct RefinedGrid2 {
   bool is_cut(std::int32_t c) const { return touch_count[static_cast<std::size_t>(c)] > 0; }
   // Root cell containing cell c.
   std::int32_t root_of(std::int32_t c) const {
-    const auto& cell = forest.cell(c);
-    return forest.root(cell.i >> cell.level, cell.j >> cell.level);
+    const auto coarse = forest.coarse_cell(c);
+    return forest.root(coarse[0], coarse[1]);
   }
 };
 

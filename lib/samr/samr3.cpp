@@ -181,8 +181,7 @@ class Refiner {
 
   // Tets of `level` now exist in the coarse cube of tet t.
   void note_level(std::int32_t t, int level) {
-    const auto& x = g_.forest.tet(t);
-    const std::int64_t ci = x.cube[0] >> x.level, cj = x.cube[1] >> x.level, ck = x.cube[2] >> x.level;
+    const auto [ci, cj, ck] = g_.forest.coarse_cell(t);
     const auto cube = static_cast<std::size_t>(g_.cube_index(ci, cj, ck));
     if (finest_[cube] >= level) return;
     finest_[cube] = static_cast<std::uint8_t>(level);

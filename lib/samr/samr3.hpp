@@ -60,8 +60,8 @@ struct RefinedGrid3 {
   }
   // Coarse cube holding tet t.
   std::int64_t cube_of(std::int32_t t) const {
-    const auto& x = forest.tet(t);
-    return cube_index(x.cube[0] >> x.level, x.cube[1] >> x.level, x.cube[2] >> x.level);
+    const auto coarse = forest.coarse_cell(t);
+    return cube_index(coarse[0], coarse[1], coarse[2]);
   }
   std::span<const std::int32_t> candidates_of_cube(std::int64_t cube) const {
     const auto b = static_cast<std::size_t>(cube_candidate_begin[static_cast<std::size_t>(cube)]);
