@@ -1,20 +1,24 @@
 #pragma once
-// Open-addressing hash map from 64-bit lattice keys to local ids: the node registry.
-// Much faster than std::unordered_map for the millions of lookups of one mesh.
+// Open-addressing hash maps from keys to local ids (the node registry, the parallel merge's
+// identities). Much faster than std::unordered_map for the millions of lookups of one mesh.
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
 namespace cisamr::grid {
 
-class KeyMap {
+// Open addressing with linear probing from a key to a non-negative id. `Hash` maps a key
+// to 64 well-mixed bits; the table keeps its load at most one half.
+template <class Key, class Hash>
+class OpenKeyMap {
  public:
   static constexpr std::int32_t kNone = -1;
 
-  explicit KeyMap(std::size_t expected = 1024) { rehash(capacity_for(expected)); }
+  explicit OpenKeyMap(std::size_t expected = 1024) { rehash(capacity_for(expected)); }
 
   std::size_t size() const { return size_; }
 
-  std::int32_t find(std::uint64_t key) const {
+  std::int32_t find(const Key& key) const {
     std::size_t i = slot(key);
     while (true) {
       const std::int32_t v = values_[i];
@@ -25,7 +29,7 @@ class KeyMap {
   }
 
   // Returns the id stored for key, inserting `value` if the key is new; `inserted` tells.
-  std::int32_t insert(std::uint64_t key, std::int32_t value, bool& inserted) {
+  std::int32_t insert(const Key& key, std::int32_t value, bool& inserted) {
     if ((size_ + 1) * 2 > values_.size()) rehash(values_.size() * 2);
     std::size_t i = slot(key);
     while (true) {
@@ -46,7 +50,7 @@ class KeyMap {
   }
 
  private:
-  std::vector<std::uint64_t> keys_;
+  std::vector<Key> keys_;
   std::vector<std::int32_t> values_;
   std::size_t mask_ = 0, size_ = 0;
 
@@ -55,18 +59,13 @@ class KeyMap {
     while (c < 2 * n) c <<= 1;
     return c;
   }
-  std::size_t slot(std::uint64_t key) const {
-    key ^= key >> 33;
-    key *= 0xff51afd7ed558ccdULL;
-    key ^= key >> 33;
-    return static_cast<std::size_t>(key) & mask_;
-  }
+  std::size_t slot(const Key& key) const { return static_cast<std::size_t>(Hash{}(key)) & mask_; }
   void rehash(std::size_t capacity) {
-    std::vector<std::uint64_t> old_keys;
+    std::vector<Key> old_keys;
     std::vector<std::int32_t> old_values;
     old_keys.swap(keys_);
     old_values.swap(values_);
-    keys_.assign(capacity, 0);
+    keys_.assign(capacity, Key{});
     values_.assign(capacity, kNone);
     mask_ = capacity - 1;
     size_ = 0;
@@ -77,5 +76,18 @@ class KeyMap {
       }
   }
 };
+
+// The murmur3 finaliser, enough to spread lattice keys (whose low bits repeat).
+struct LatticeKeyHash {
+  std::uint64_t operator()(std::uint64_t key) const {
+    key ^= key >> 33;
+    key *= 0xff51afd7ed558ccdULL;
+    key ^= key >> 33;
+    return key;
+  }
+};
+
+// The node registry: lattice key to local node id.
+using KeyMap = OpenKeyMap<std::uint64_t, LatticeKeyHash>;
 
 }  // namespace cisamr::grid

@@ -3,6 +3,7 @@
 // and its SAMR refinements. Cells live in one flat array; the four children of a cell
 // are consecutive (order: (0,0), (1,0), (0,1), (1,1) in x-then-y). Cell coordinates are
 // global integer indices at the cell's own level.
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -30,6 +31,11 @@ class QuadForest {
     return cells_[static_cast<std::size_t>(c)];
   }
   bool is_leaf(std::int32_t c) const { return cells_[static_cast<std::size_t>(c)].first_child < 0; }
+  // Global index of the coarse cell holding cell c.
+  std::array<std::int64_t, 2> coarse_cell(std::int32_t c) const {
+    const Cell& x = cell(c);
+    return {x.i >> x.level, x.j >> x.level};
+  }
   std::int32_t root_count() const { return root_count_; }
   // Root of global coarse cell (ci, cj), or -1 outside the range.
   std::int32_t root(std::int64_t ci, std::int64_t cj) const;

@@ -37,6 +37,11 @@ class TetForest {
     return tets_[static_cast<std::size_t>(t)];
   }
   bool is_leaf(std::int32_t t) const { return tets_[static_cast<std::size_t>(t)].first_child < 0; }
+  // Global index of the coarse cube holding tet t.
+  std::array<std::int64_t, 3> coarse_cell(std::int32_t t) const {
+    const Tet& x = tet(t);
+    return {x.cube[0] >> x.level, x.cube[1] >> x.level, x.cube[2] >> x.level};
+  }
   tet::Kind kind(std::int32_t t) const { return kind_of_local(tet(t).local); }
   int child_count(std::int32_t t) const { return tet::child_count(kind(t)); }
   std::int32_t root_count() const { return root_count_; }

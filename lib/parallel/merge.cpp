@@ -5,6 +5,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "grid/key_map.hpp"
 #include "grid/tet_lattice.hpp"
 #include "parallel/collective.hpp"
 #include "parallel/exchange.hpp"
@@ -54,51 +55,13 @@ struct Identities<3> {
   }
 };
 
-// Open addressing from an identity to a local id.
-template <class Key>
-class IdentityMap {
- public:
-  explicit IdentityMap(std::size_t expected) {
-    std::size_t c = 16;
-    while (c < 2 * expected) c <<= 1;
-    keys_.resize(c);
-    values_.assign(c, -1);
-  }
-  std::int32_t find(const Key& key) const {
-    for (std::size_t i = hash_of(key) & (values_.size() - 1);; i = (i + 1) & (values_.size() - 1)) {
-      if (values_[i] < 0) return -1;
-      if (keys_[i] == key) return values_[i];
-    }
-  }
-  std::int32_t insert(const Key& key, std::int32_t value, bool& inserted) {
-    if ((size_ + 1) * 2 > values_.size()) grow();
-    for (std::size_t i = hash_of(key) & (values_.size() - 1);; i = (i + 1) & (values_.size() - 1)) {
-      if (values_[i] < 0) {
-        keys_[i] = key;
-        values_[i] = value;
-        ++size_;
-        inserted = true;
-        return value;
-      }
-      if (keys_[i] == key) {
-        inserted = false;
-        return values_[i];
-      }
-    }
-  }
-
- private:
-  void grow() {
-    IdentityMap bigger(values_.size());
-    bool ignored = false;
-    for (std::size_t i = 0; i < values_.size(); ++i)
-      if (values_[i] >= 0) bigger.insert(keys_[i], values_[i], ignored);
-    *this = std::move(bigger);
-  }
-  std::vector<Key> keys_;
-  std::vector<std::int32_t> values_;
-  std::size_t size_ = 0;
+struct IdentityHash {
+  template <class Key>
+  std::uint64_t operator()(const Key& key) const { return hash_of(key); }
 };
+// From an identity to a local id.
+template <class Key>
+using IdentityMap = grid::OpenKeyMap<Key, IdentityHash>;
 
 template <class Key>
 struct Claim {  // one rank's claim on a face identity, as the rendezvous rank sees it

@@ -1,6 +1,7 @@
 #pragma once
 // Inside the pipeline module: what both dimensions' kernels share around their stages.
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "core/types.hpp"
@@ -33,5 +34,13 @@ struct MeshParts {
 // in place: no second copy of the connectivity).
 template <int Dim>
 void assemble(const geometry::SceneDesc& scene, MeshParts<Dim>&& parts, int partition_id, Result<Dim>& result);
+
+// Each dimension's kernel (kernel2.cpp, kernel3.cpp): runs its stages on the coarse cells of
+// `box` grown by `ghost`, fills the counters and stage times of `result`, and returns what
+// the mesh is made of; the stages' working state is released on return, before assembly.
+MeshParts<2> run_stages(const geometry::Oracle2& oracle, const grid::Lattice<2>& lattice, const grid::CellRange<2>& box,
+                        int ghost, const Options& options, std::span<const int> levels, Result<2>& result);
+MeshParts<3> run_stages(const geometry::Oracle3& oracle, const grid::Lattice<3>& lattice, const grid::CellRange<3>& box,
+                        int ghost, const Options& options, std::span<const int> levels, Result<3>& result);
 
 }  // namespace cisamr::pipeline

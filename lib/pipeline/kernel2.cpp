@@ -5,7 +5,6 @@
 #include "subdivide/subdivide2.hpp"
 
 namespace cisamr::pipeline {
-namespace {
 
 // Runs the stages and returns what the mesh is made of; their working state (the forest,
 // the node table's masks and registry) is released on return, before assembly.
@@ -42,19 +41,6 @@ MeshParts<2> run_stages(const geometry::Oracle2& oracle, const grid::Lattice2& l
   counters.max_level = lattice.max_level;
   return {std::move(nodes.key),          std::move(nodes.position), std::move(tris.extra_points), {},
           std::move(tris.triangles),     std::move(tris.phase)};
-}
-
-}  // namespace
-
-Result<2> run(const geometry::Oracle2& oracle, const grid::Lattice2& lattice, const grid::CellRange<2>& box,
-              int ghost, const Options& options, int partition_id, std::span<const int> levels) {
-  Result<2> result;
-  MeshParts<2> parts = run_stages(oracle, lattice, box, ghost, options, levels, result);
-  {
-    ScopedPhase timer(&result.times, "assemble");
-    assemble(oracle.scene(), std::move(parts), partition_id, result);
-  }
-  return result;
 }
 
 }  // namespace cisamr::pipeline

@@ -7,7 +7,6 @@
 #include "subdivide/subdivide3.hpp"
 
 namespace cisamr::pipeline {
-namespace {
 
 // Runs the stages and returns what the mesh is made of. Their working state (the forest,
 // the snapping state, the swaps) is released on return, before the mesh is built, so that
@@ -68,19 +67,6 @@ MeshParts<3> run_stages(const geometry::Oracle3& oracle, const grid::Lattice3& l
   counters.split_above_5 = tets.split_above_5;
   return {std::move(nodes.key),  std::move(nodes.position), std::move(tets.extra_points),
           std::move(tets.extra_identity), std::move(tets.tets), std::move(tets.phase)};
-}
-
-}  // namespace
-
-Result<3> run(const geometry::Oracle3& oracle, const grid::Lattice3& lattice, const grid::CellRange<3>& box,
-              int ghost, const Options& options, int partition_id, std::span<const int> levels) {
-  Result<3> result;
-  MeshParts<3> parts = run_stages(oracle, lattice, box, ghost, options, levels, result);
-  {
-    ScopedPhase timer(&result.times, "assemble");
-    assemble(oracle.scene(), std::move(parts), partition_id, result);
-  }
-  return result;
 }
 
 }  // namespace cisamr::pipeline

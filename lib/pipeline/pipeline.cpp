@@ -87,6 +87,18 @@ void assemble(const geometry::SceneDesc& scene, MeshParts<Dim>&& parts, int part
   for (std::size_t i = 0; i < nodes; ++i) m.node_global_id[i] = static_cast<GlobalId>(i);
 }
 
+template <int Dim>
+Result<Dim> run(const geometry::Oracle<Dim>& oracle, const grid::Lattice<Dim>& lattice, const grid::CellRange<Dim>& box,
+                int ghost, const Options& options, int partition_id, std::span<const int> levels) {
+  Result<Dim> result;
+  MeshParts<Dim> parts = run_stages(oracle, lattice, box, ghost, options, levels, result);
+  {
+    ScopedPhase timer(&result.times, "assemble");
+    assemble(oracle.scene(), std::move(parts), partition_id, result);
+  }
+  return result;
+}
+
 Result<2> mesh(const geometry::Oracle2& oracle, const Options& options) {
   const grid::Lattice2 lattice = make_lattice<2>(oracle.scene(), options);
   const std::vector<int> levels = effective_levels2(oracle.scene(), lattice);
@@ -106,5 +118,9 @@ template grid::CellRange<2> ghosted_range<2>(const grid::Lattice<2>&, const grid
 template grid::CellRange<3> ghosted_range<3>(const grid::Lattice<3>&, const grid::CellRange<3>&, int);
 template void assemble<2>(const geometry::SceneDesc&, MeshParts<2>&&, int, Result<2>&);
 template void assemble<3>(const geometry::SceneDesc&, MeshParts<3>&&, int, Result<3>&);
+template Result<2> run<2>(const geometry::Oracle2&, const grid::Lattice<2>&, const grid::CellRange<2>&, int,
+                          const Options&, int, std::span<const int>);
+template Result<3> run<3>(const geometry::Oracle3&, const grid::Lattice<3>&, const grid::CellRange<3>&, int,
+                          const Options&, int, std::span<const int>);
 
 }  // namespace cisamr::pipeline

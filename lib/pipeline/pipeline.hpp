@@ -64,10 +64,9 @@ grid::Lattice<Dim> make_lattice(const geometry::SceneDesc& scene, const Options&
 // of the whole-domain run. Cells of void phases are dropped; unused nodes removed.
 // `levels`: the level rule R1 asks of each of the oracle's inclusions, from
 // effective_levels2/3 over the whole scene (a partition's oracle holds a subset of it).
-Result<2> run(const geometry::Oracle2& oracle, const grid::Lattice<2>& lattice, const grid::CellRange<2>& box,
-              int ghost, const Options& options, int partition_id, std::span<const int> levels);
-Result<3> run(const geometry::Oracle3& oracle, const grid::Lattice<3>& lattice, const grid::CellRange<3>& box,
-              int ghost, const Options& options, int partition_id, std::span<const int> levels);
+template <int Dim>
+Result<Dim> run(const geometry::Oracle<Dim>& oracle, const grid::Lattice<Dim>& lattice, const grid::CellRange<Dim>& box,
+                int ghost, const Options& options, int partition_id, std::span<const int> levels);
 
 // The whole domain in one box, with the levels effective_levels2/3 settle over the whole
 // scene (as every partition of the parallel mesher uses, so that one process and any

@@ -126,7 +126,7 @@ RefinedGrid2 refine2(const geometry::Oracle2& oracle, const grid::Lattice2& latt
                      const grid::CellRange<2>& range, std::span<const int> levels) {
   if (!levels.empty() && static_cast<int>(levels.size()) != oracle.inclusion_count())
     throw std::invalid_argument("refine2: one level per inclusion expected");
-  RefinedGrid2 g{grid::QuadForest(lattice, range), {}, {}, {}, {}, {}, 0};
+  RefinedGrid2 g{{}, grid::QuadForest(lattice, range), {}, {}, 0};
   const std::int32_t roots = g.forest.root_count();
   const std::int64_t nx = range.count(0), ny = range.count(1);
 

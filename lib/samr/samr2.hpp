@@ -15,6 +15,7 @@
 
 #include "geometry/oracle.hpp"
 #include "grid/quad_forest.hpp"
+#include "samr/touch_lists.hpp"
 
 namespace cisamr::samr {
 
@@ -25,15 +26,12 @@ namespace cisamr::samr {
 // another, so this bounds what a partition's ghost must hold (lib/parallel/ghost.hpp).
 inline constexpr int kReachCells2 = 2;
 
-struct RefinedGrid2 {
+// Per cell (TouchLists): inclusions whose boundary meets the closed cell.
+struct RefinedGrid2 : TouchLists {
   grid::QuadForest forest;
   // Per root: inclusions whose bounding box meets the closed root box (CSR).
   std::vector<std::int32_t> root_candidate_begin;  // root_count + 1
   std::vector<std::int32_t> root_candidates;
-  // Per cell: inclusions whose boundary meets the closed cell (CSR-like, append-only pool).
-  std::vector<std::int32_t> touch_begin;
-  std::vector<std::uint16_t> touch_count;
-  std::vector<std::int32_t> touch_pool;
   std::int64_t refinements = 0;
 
   std::span<const std::int32_t> candidates_of_root(std::int32_t root) const {
@@ -41,15 +39,10 @@ struct RefinedGrid2 {
     const auto e = static_cast<std::size_t>(root_candidate_begin[static_cast<std::size_t>(root) + 1]);
     return {root_candidates.data() + b, e - b};
   }
-  std::span<const std::int32_t> touched(std::int32_t c) const {
-    return {touch_pool.data() + touch_begin[static_cast<std::size_t>(c)],
-            touch_count[static_cast<std::size_t>(c)]};
-  }
-  bool is_cut(std::int32_t c) const { return touch_count[static_cast<std::size_t>(c)] > 0; }
   // Root cell containing cell c.
   std::int32_t root_of(std::int32_t c) const {
-    const auto& cell = forest.cell(c);
-    return forest.root(cell.i >> cell.level, cell.j >> cell.level);
+    const auto coarse = forest.coarse_cell(c);
+    return forest.root(coarse[0], coarse[1]);
   }
 };
 

@@ -181,8 +181,7 @@ class Refiner {
 
   // Tets of `level` now exist in the coarse cube of tet t.
   void note_level(std::int32_t t, int level) {
-    const auto& x = g_.forest.tet(t);
-    const std::int64_t ci = x.cube[0] >> x.level, cj = x.cube[1] >> x.level, ck = x.cube[2] >> x.level;
+    const auto [ci, cj, ck] = g_.forest.coarse_cell(t);
     const auto cube = static_cast<std::size_t>(g_.cube_index(ci, cj, ck));
     if (finest_[cube] >= level) return;
     finest_[cube] = static_cast<std::uint8_t>(level);
@@ -326,7 +325,7 @@ RefinedGrid3 refine3(const geometry::Oracle3& oracle, const grid::Lattice3& latt
                      const grid::CellRange<3>& range, std::span<const int> levels) {
   if (!levels.empty() && static_cast<int>(levels.size()) != oracle.inclusion_count())
     throw std::invalid_argument("refine3: one level per inclusion expected");
-  RefinedGrid3 g{grid::TetForest(lattice, range), {}, {}, {}, {}, {}, 0, 0};
+  RefinedGrid3 g{{}, grid::TetForest(lattice, range), {}, {}, 0, 0};
   const std::int64_t cubes = range.count(0) * range.count(1) * range.count(2);
   g.cube_candidate_begin.assign(static_cast<std::size_t>(cubes) + 1, 0);
   // Candidates per coarse cube: one AABB-tree query per block of cubes, then the same

@@ -22,6 +22,7 @@
 
 #include "geometry/oracle.hpp"
 #include "grid/tet_forest.hpp"
+#include "samr/touch_lists.hpp"
 
 namespace cisamr::samr {
 
@@ -33,24 +34,16 @@ namespace cisamr::samr {
 // whatever the number of sweeps (lib/parallel/README.md, "Ghost region (3D)").
 inline constexpr int kReachCoarseCells3 = 2;
 
-struct RefinedGrid3 {
+// Per tet (TouchLists): inclusions whose boundary meets the tet's closed bounding box.
+// Conservative: a tet with an empty list lies inside one phase.
+struct RefinedGrid3 : TouchLists {
   grid::TetForest forest;
   // Per coarse cube of the range (x fastest): inclusions whose bounding box meets the
   // closed cube (CSR).
   std::vector<std::int32_t> cube_candidate_begin;  // cubes + 1
   std::vector<std::int32_t> cube_candidates;
-  // Per tet: inclusions whose boundary meets the tet's closed bounding box (append-only
-  // pool). Conservative: a tet with an empty list lies inside one phase.
-  std::vector<std::int32_t> touch_begin;
-  std::vector<std::uint16_t> touch_count;
-  std::vector<std::int32_t> touch_pool;
   std::int64_t refinements = 0;
   int sweeps = 0;  // synchronous sweeps, the last one marking nothing
-
-  std::span<const std::int32_t> touched(std::int32_t t) const {
-    return {touch_pool.data() + touch_begin[static_cast<std::size_t>(t)], touch_count[static_cast<std::size_t>(t)]};
-  }
-  bool is_cut(std::int32_t t) const { return touch_count[static_cast<std::size_t>(t)] > 0; }
 
   // Index of the coarse cube (global coarse indices) in the range, or -1 outside.
   std::int64_t cube_index(std::int64_t ci, std::int64_t cj, std::int64_t ck) const {
@@ -60,8 +53,8 @@ struct RefinedGrid3 {
   }
   // Coarse cube holding tet t.
   std::int64_t cube_of(std::int32_t t) const {
-    const auto& x = forest.tet(t);
-    return cube_index(x.cube[0] >> x.level, x.cube[1] >> x.level, x.cube[2] >> x.level);
+    const auto coarse = forest.coarse_cell(t);
+    return cube_index(coarse[0], coarse[1], coarse[2]);
   }
   std::span<const std::int32_t> candidates_of_cube(std::int64_t cube) const {
     const auto b = static_cast<std::size_t>(cube_candidate_begin[static_cast<std::size_t>(cube)]);

@@ -52,8 +52,7 @@ class Subdivider {
   Triangles2 run(const grid::CellRange<2>& owned) {
     for (std::int32_t c = 0; c < static_cast<std::int32_t>(forest_.size()); ++c) {
       if (!forest_.is_leaf(c)) continue;
-      const auto& cell = forest_.cell(c);
-      if (!owned.contains({cell.i >> cell.level, cell.j >> cell.level})) continue;
+      if (!owned.contains(forest_.coarse_cell(c))) continue;
       leaf(c);
     }
     return std::move(out_);

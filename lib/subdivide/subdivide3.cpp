@@ -26,8 +26,7 @@ class Subdivider3 {
   Tets3 run(const grid::CellRange<3>& owned) {
     for (std::int32_t t = 0; t < static_cast<std::int32_t>(forest_.size()); ++t) {
       if (!forest_.is_leaf(t)) continue;
-      const auto& x = forest_.tet(t);
-      if (!owned.contains({x.cube[0] >> x.level, x.cube[1] >> x.level, x.cube[2] >> x.level})) continue;
+      if (!owned.contains(forest_.coarse_cell(t))) continue;
       leaf(t);
     }
     return std::move(out_);

@@ -154,7 +154,7 @@ class ReferenceRefiner {
 
 samr::RefinedGrid3 reference_refine3(const geometry::Oracle3& oracle, const grid::Lattice3& lattice,
                                      const grid::CellRange<3>& range, std::span<const int> levels) {
-  samr::RefinedGrid3 g{grid::TetForest(lattice, range), {}, {}, {}, {}, {}, 0, 0};
+  samr::RefinedGrid3 g{{}, grid::TetForest(lattice, range), {}, {}, 0, 0};
   std::vector<std::int32_t> found;
   const double h = lattice.h;
   for (std::int64_t ck = range.lo[2]; ck < range.hi[2]; ++ck)
