@@ -18,6 +18,7 @@ namespace {
 
 struct MeshArgs {
   std::string scene, output, report, svg, format;
+  std::string plane = "stress";  // 2D Abaqus elements: CPS3 (stress) or CPE3 (strain)
   bool gather = false;
   bool fixed_ghost = false;  // the fixed 3-cell inclusion margin instead of the level-aware one
   driver::Options options;
@@ -83,7 +84,8 @@ void run_mesh(MeshArgs& args, const GlobalFlags& flags, int& exit_code) {
   if (show_progress(flags)) options.progress = [](const std::string& what) { std::fprintf(stderr, "cisamr: %s\n", what.c_str()); };
   // Fail on a bad output name before any work.
   const driver::Output output =
-      driver::plan_output(comm, args.output, args.gather, driver::is_distributed(comm, options), args.format);
+      driver::plan_output(comm, args.output, args.gather, driver::is_distributed(comm, options), args.format,
+                          args.plane == "strain" ? io::PlaneKind::strain : io::PlaneKind::stress);
   auto meshed = driver::mesh_scene(comm, args.scene, options);
   std::visit(
       [&](auto& run) {
@@ -117,6 +119,9 @@ void add_mesh_command(CLI::App& app, GlobalFlags& flags, int& exit_code) {
       ->required();
   cmd->add_option("--format", args->format, "Mesh format when -o does not name one (-o - writes standard output)")
       ->check(CLI::IsMember({"vtu", "msh", "inp", "mesh"}));
+  cmd->add_option("--plane", args->plane,
+                  "2D .inp output: plane stress (CPS3 elements, the default) or plane strain (CPE3)")
+      ->check(CLI::IsMember({"stress", "strain"}));
   cmd->add_option("--report", args->report, "Write a JSON report (counts, per-phase measure, aspect ratios, timings)");
   cmd->add_option("--svg", args->svg, "Write a picture of the 2D mesh coloured by phase");
   cmd->add_option("--alpha", knobs.alpha, "r-adaptivity snap threshold, fraction of the edge length")

@@ -90,6 +90,20 @@ void take_figures(const Comm& comm, MeshRun<Dim>& run) {
 
 }  // namespace
 
+template <int Dim>
+Box<Dim> face_box(const geometry::SceneDesc& scene, const pipeline::Options& options) {
+  const grid::Lattice<Dim> lattice = pipeline::make_lattice<Dim>(scene, options);
+  Box<Dim> box;
+  for (int d = 0; d < Dim; ++d) {
+    box.min[d] = lattice.coordinate(d, 0);
+    box.max[d] = lattice.coordinate(d, lattice.coarse_cells[d] * lattice.units(0));
+  }
+  return box;
+}
+
+template Box<2> face_box<2>(const geometry::SceneDesc&, const pipeline::Options&);
+template Box<3> face_box<3>(const geometry::SceneDesc&, const pipeline::Options&);
+
 bool is_distributed(const Comm& comm, const Options& options) { return comm.size() > 1 || options.partitions > 0; }
 
 std::variant<MeshRun<2>, MeshRun<3>> mesh_scene(const Comm& comm, const std::string& scene_path,
@@ -111,6 +125,7 @@ std::variant<MeshRun<2>, MeshRun<3>> mesh_scene(const Comm& comm, const std::str
     run.ranks = comm.size();
     run.start = start;
     run.bound = options.bound > 0 ? options.bound : Dim == 2 ? 3.0 : 5.0;
+    run.face_box = face_box<Dim>(scene, options.pipeline);
     if (distributed) {
       tell(comm, options, "meshing on " + std::to_string(comm.size()) + " rank(s)");
       parallel::MeshOptions o{.pipeline = options.pipeline,
@@ -132,10 +147,11 @@ std::variant<MeshRun<2>, MeshRun<3>> mesh_scene(const Comm& comm, const std::str
 }
 
 Output plan_output(const Comm& comm, const std::string& requested, bool gather, bool distributed,
-                   const std::string& format) {
+                   const std::string& format, io::PlaneKind plane) {
   namespace fs = std::filesystem;
   const std::string extension = format.empty() ? fs::path(requested).extension().string() : "." + format;
   Output out;
+  out.plane = plane;
   out.pieces = distributed && (extension == ".pvtu" || (extension == ".vtu" && comm.size() > 1 && !gather));
   out.path = out.pieces ? fs::path(requested).replace_extension(".pvtu").string() : requested;
   parallel::run_collectively(comm, [&] {
@@ -162,10 +178,15 @@ void write_outputs(const Comm& comm, MeshRun<Dim>& run, const Output& output, co
   mesh::SimplexMesh<Dim> gathered_copy;
   if ((!output.pieces || picture) && comm.size() > 1) gathered_copy = parallel::gather_mesh<Dim>(comm, piece);
   const mesh::SimplexMesh<Dim>& gathered = comm.size() > 1 ? gathered_copy : piece.mesh;
+  io::MeshWriteOptions options;
+  options.format = output.format;
+  options.plane = output.plane;
+  options.face_box = Box3{};
+  for (int d = 0; d < Dim; ++d) options.face_box->min[d] = run.face_box.min[d], options.face_box->max[d] = run.face_box.max[d];
   if (output.pieces)
-    parallel::write_pvtu<Dim>(comm, output.path, piece.mesh);
+    parallel::write_pvtu<Dim>(comm, output.path, piece.mesh, run.mesh.phases, options);
   else
-    parallel::write_gathered<Dim>(comm, output.path, gathered, run.mesh.phases, {.format = output.format});
+    parallel::write_gathered<Dim>(comm, output.path, gathered, run.mesh.phases, options);
   if constexpr (Dim == 2)
     if (picture)
       parallel::run_collectively(comm, [&] {

@@ -51,6 +51,7 @@ struct MeshRun {
   // counters over every partition of every rank; every partition with its box, load and
   // ghost (sequential: one); this rank's phase times.
   parallel::DistributedMesh<Dim> mesh;
+  Box<Dim> face_box{};  // the exact coordinates of the nodes on each domain face (face_box)
   double bound = 0;
   quality::AspectStats aspect;              // of the whole mesh
   std::vector<PhaseFigures> phase_figures;  // per scene phase (Options::figures)
@@ -60,6 +61,13 @@ struct MeshRun {
   std::vector<parallel::PhaseSpread> timings;  // per phase, over ranks (finish)
   double total_seconds = 0;                    // slowest rank (finish)
 };
+
+// The box whose faces hold the mesh's boundary nodes, coordinate for coordinate: the
+// lattice's position of the domain's first and last lattice planes (the min corner, and
+// min + N·h rounded once, which may differ from domain.max in the last bit). The writers'
+// boundary sets compare node coordinates with it exactly.
+template <int Dim>
+Box<Dim> face_box(const geometry::SceneDesc& scene, const pipeline::Options& options);
 
 // Reads the scene (every rank parses it; STL files as lib/parallel's README says), meshes
 // it, and takes the aspect-ratio statistics, and with Options::figures the per-phase
@@ -72,15 +80,17 @@ std::variant<MeshRun<2>, MeshRun<3>> mesh_scene(const Comm& comm, const std::str
 struct Output {
   std::string path;  // "-": standard output (one file, `format` named)
   std::optional<io::MeshFormat> format;  // when the path's extension does not name it
+  io::PlaneKind plane = io::PlaneKind::stress;  // 2D Abaqus elements (CPS3 / CPE3)
   bool pieces = false;
   std::vector<std::string> piece_paths;
 };
 
 // Checks the requested output before any work (format; pieces or one gathered file).
 // `format` ("vtu", "msh", "inp", "mesh"; empty: from the extension) names the format of a
-// path without one, such as "-". Throws InputError on every rank.
+// path without one, such as "-"; `plane` the 2D Abaqus element type. Throws InputError on
+// every rank.
 Output plan_output(const Comm& comm, const std::string& requested, bool gather, bool distributed,
-                   const std::string& format = "");
+                   const std::string& format = "", io::PlaneKind plane = io::PlaneKind::stress);
 
 // Writes the mesh where `output` says and, in 2D with `svg` given, a picture of it (timed
 // as "write").

@@ -4,10 +4,16 @@
 //
 //   .vtu   VTK XML UnstructuredGrid, raw appended binary (UInt64 headers, little endian):
 //          cell data phase (Int32), partition (Int32), aspect_ratio (Float64);
-//          point data global_id (Int64); points always with 3 components.
-//   .msh   Gmsh 4.1 ASCII: one physical group and one entity per phase (tag = phase id).
-//   .inp   Abaqus: *NODE, then one *ELEMENT block per phase, TYPE=CPS3|C3D4, ELSET=name.
-//   .mesh  Medit/INRIA, MeshVersionFormatted 2: element reference = phase id.
+//          point data global_id (Int64), boundary (UInt8, bit f: on box face f); points
+//          always with 3 components; field data phase_names (String), phase_ids (Int32).
+//   .msh   Gmsh 4.1 ASCII: one physical group and one entity per phase (tag = phase id);
+//          per box face a curve (2D) or surface (3D) entity with its boundary lines or
+//          triangles, in a physical group named XMIN ... ZMAX.
+//   .inp   Abaqus: *NODE, one *ELEMENT block per phase, TYPE=CPS3|CPE3|C3D4, ELSET=name;
+//          *NSET XMIN ... ZMAX and CORNER0; *SURFACE XMIN_FACES ... over face ELSETs.
+//   .mesh  Medit/INRIA, MeshVersionFormatted 2: element reference = phase id; boundary
+//          edges (2D) or triangles (3D) with reference face + 1; "# phase ID NAME" comments.
+// Box faces are numbered XMIN, XMAX, YMIN, YMAX, ZMIN, ZMAX = 0..5 (mesh/boundary.hpp).
 //
 // Numbers in ASCII formats are printed with the shortest text that reads back to the same
 // double, so every format round-trips coordinates bit for bit.
@@ -27,16 +33,24 @@ enum class MeshFormat { vtu, msh, inp, medit };
 // format '.xyz' (use .vtu, .msh, .inp or .mesh)"). Cheap: call it before meshing to fail early.
 MeshFormat mesh_format_of(const std::string& path);
 
+// 2D Abaqus elements: CPS3 (plane stress) or CPE3 (plane strain).
+enum class PlaneKind { stress, strain };
+
 struct MeshWriteOptions {
   // Per-cell aspect ratio for the VTU "aspect_ratio" array; computed when empty.
   std::vector<double> cell_aspect_ratio;
   // The format when the path's extension does not name it: "-" (standard output).
   std::optional<MeshFormat> format;
+  // The box whose faces the boundary sets refer to (z unused in 2D): the exact coordinates
+  // of the nodes on each face (driver::face_box). Unset: the mesh's bounding box, which is
+  // the same whenever every face carries a node (always so for a whole mesh without voids).
+  std::optional<Box3> face_box;
+  PlaneKind plane = PlaneKind::stress;  // .inp in 2D
 };
 
 // Writes `m` in the format of `path`'s extension (or options.format). `phases` gives the names (msh physical
-// names, inp ELSET names); a phase id used by a cell but missing there is named
-// "phase<id>". Empty cell_partition / node_global_id are written as 0 / the node index.
+// names, inp ELSET names, vtu phase_names, Medit comments); a phase id used by a cell but
+// missing there is named "phase<id>". Empty cell_partition / node_global_id are written as 0 / the node index.
 // Throws InputError for an unknown extension or an unwritable path; the destination is
 // either the complete new file or untouched.
 template <int Dim>
@@ -44,9 +58,14 @@ void write_mesh(const std::string& path, const mesh::SimplexMesh<Dim>& m,
                 const std::vector<geometry::Phase>& phases, const MeshWriteOptions& options = {});
 
 // The VTU writer alone (one piece): what a parallel run writes per rank before the .pvtu.
+// Its boundary bits refer to options.face_box: give the whole domain's for a piece.
 template <int Dim>
 void write_vtu(const std::string& path, const mesh::SimplexMesh<Dim>& m,
-               const MeshWriteOptions& options = {});
+               const std::vector<geometry::Phase>& phases, const MeshWriteOptions& options = {});
+
+// The .pvtu text listing `pieces` (file names relative to the .pvtu), declaring the arrays
+// write_vtu writes.
+std::string pvtu_text(const std::vector<std::string>& pieces);
 
 struct LoadedMesh {
   int dimension = 0;   // 2 or 3: which of mesh2 / mesh3 holds the mesh

@@ -14,6 +14,7 @@
 #include "core/error.hpp"
 #include "io/atomic_file.hpp"
 #include "io/mesh_io.hpp"
+#include "mesh/boundary.hpp"
 #include "mesh/metrics.hpp"
 
 namespace cisamr::io {
@@ -119,6 +120,36 @@ PhaseGroups group_by_phase(const std::vector<std::int32_t>& cell_phase) {
   return groups;
 }
 
+// Every phase named in `phases` and every id a cell uses, ascending, with its name.
+std::vector<geometry::Phase> phases_in_id_order(const std::vector<geometry::Phase>& phases,
+                                                const std::vector<std::int32_t>& cell_phase) {
+  std::vector<int> ids(cell_phase.begin(), cell_phase.end());
+  for (const auto& p : phases) ids.push_back(p.id);
+  std::sort(ids.begin(), ids.end());
+  ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
+  std::vector<geometry::Phase> out;
+  for (int id : ids) out.push_back({id, phase_name(phases, id), false});
+  return out;
+}
+
+// The boundary sets the writers emit, against options.face_box or the bounding box.
+template <int Dim>
+mesh::BoundarySets<Dim> boundary_sets_for(const mesh::SimplexMesh<Dim>& m, const MeshWriteOptions& options) {
+  Box<Dim> box = mesh::bounding_box(m);
+  if (options.face_box)
+    for (int d = 0; d < Dim; ++d) box.min[d] = options.face_box->min[d], box.max[d] = options.face_box->max[d];
+  return mesh::boundary_sets(m, box);
+}
+
+// The nodes of a cell facet, in their outward order (mesh::FacetVertices).
+template <int Dim>
+std::array<LocalId, Dim> facet_nodes(const mesh::SimplexMesh<Dim>& m, const mesh::CellFacet& f) {
+  std::array<LocalId, Dim> nodes;
+  const LocalId* corners = m.cell(static_cast<std::size_t>(f.cell));
+  for (int k = 0; k < Dim; ++k) nodes[k] = corners[mesh::FacetVertices<Dim>::local[f.opposite][k]];
+  return nodes;
+}
+
 // ------------------------------------------------------------------------------ VTU
 
 // One appended array: an 8-byte size header then the bytes, produced in chunks.
@@ -143,7 +174,7 @@ void write_array_raw(AtomicFile& file, const std::vector<T>& values) {
 
 template <int Dim>
 void write_vtu_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m,
-                    const MeshWriteOptions& options) {
+                    const std::vector<geometry::Phase>& phases, const MeshWriteOptions& options) {
   constexpr int kCorners = Dim + 1;
   const std::size_t nodes = m.node_count(), cells = m.cell_count();
   if (!options.cell_aspect_ratio.empty() && options.cell_aspect_ratio.size() != cells)
@@ -161,6 +192,7 @@ void write_vtu_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m,
   };
   const Array arrays[] = {
       {"PointData", "Int64", "global_id", 1, nodes * 8},
+      {"PointData", "UInt8", "boundary", 1, nodes},
       {"CellData", "Int32", "phase", 1, cells * 4},
       {"CellData", "Int32", "partition", 1, cells * 4},
       {"CellData", "Float64", "aspect_ratio", 1, cells * 8},
@@ -234,6 +266,7 @@ void write_vtu_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m,
   else
     write_array_raw(file, m.cell_partition);
   write_array_raw(file, m.cell_phase);
+  write_array_raw(file, boundary_sets_for(m, options).node_faces);
   if (m.node_global_id.empty())
     write_array_chunked<std::int64_t>(file, nodes, [](std::size_t i) { return std::int64_t(i); });
   else
@@ -243,52 +276,94 @@ void write_vtu_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m,
 
 // ------------------------------------------------------------------------------ MSH 4.1
 
+// Bounding box of a set of nodes, as MSH entities give it (3 coordinates, 0 beyond Dim).
+template <int Dim>
+struct EntityBox {
+  double lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
+  bool empty = true;
+  void add(const mesh::SimplexMesh<Dim>& m, LocalId node) {
+    for (int d = 0; d < Dim; ++d) {
+      const double x = m.coords[static_cast<std::size_t>(node) * Dim + d];
+      lo[d] = empty ? x : std::min(lo[d], x);
+      hi[d] = empty ? x : std::max(hi[d], x);
+    }
+    empty = false;
+  }
+};
+
 template <int Dim>
 void write_msh_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m,
-                    const std::vector<geometry::Phase>& phases) {
+                    const std::vector<geometry::Phase>& phases, const MeshWriteOptions& options) {
   constexpr int kCorners = Dim + 1;
+  constexpr int kFaces = mesh::box_face_count(Dim);
   const std::size_t nodes = m.node_count(), cells = m.cell_count();
   const PhaseGroups groups = group_by_phase(m.cell_phase);
+  const mesh::BoundarySets<Dim> sets = boundary_sets_for(m, options);
+  // Box faces that carry facets: entity tag face + 1 (dimension Dim-1), physical tag past
+  // every phase id, so that no reader that ignores the dimension of a physical name
+  // confuses a face with a phase.
+  std::vector<int> faces;
+  for (int f = 0; f < kFaces; ++f)
+    if (!sets.facets[static_cast<std::size_t>(f)].empty()) faces.push_back(f);
+  const int face_physical_base = (groups.ids.empty() ? 0 : groups.ids.back()) + 1;
+  std::size_t facet_total = 0;
+  for (int f : faces) facet_total += sets.facets[static_cast<std::size_t>(f)].size();
+
   TextWriter out(file);
   out << "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n";
 
   out << "$PhysicalNames\n";
-  out.integer(static_cast<long long>(groups.ids.size())) << '\n';
+  out.integer(static_cast<long long>(groups.ids.size() + faces.size())) << '\n';
   for (int id : groups.ids) {
     std::string name = phase_name(phases, id);
     std::replace(name.begin(), name.end(), '"', '\'');
     out.integer(Dim) << ' ';
     out.integer(id) << " \"" << name << "\"\n";
   }
+  for (int f : faces) {
+    out.integer(Dim - 1) << ' ';
+    out.integer(face_physical_base + f) << " \"" << mesh::kBoxFaceNames[static_cast<std::size_t>(f)] << "\"\n";
+  }
   out << "$EndPhysicalNames\n";
 
   // One surface (2D) or volume (3D) entity per phase, tagged with the phase id; a mesh
-  // without cells still needs an entity to hold its nodes.
+  // without cells still needs an entity to hold its nodes. One curve (2D) or surface (3D)
+  // per box face that carries facets.
   std::vector<int> entity_tags = groups.ids;
   const bool placeholder_entity = entity_tags.empty() && nodes > 0;
   if (placeholder_entity) entity_tags.push_back(1);
-  out << "$Entities\n" << (Dim == 2 ? "0 0 " : "0 0 0 ");
-  out.integer(static_cast<long long>(entity_tags.size())) << (Dim == 2 ? " 0\n" : "\n");
+  const auto write_box = [&](const EntityBox<Dim>& box) {
+    for (double x : box.lo) out << ' ', out.real(x);
+    for (double x : box.hi) out << ' ', out.real(x);
+  };
+  out << "$Entities\n";
+  if constexpr (Dim == 2) {
+    out << "0 ";
+    out.integer(static_cast<long long>(faces.size())) << ' ';
+    out.integer(static_cast<long long>(entity_tags.size())) << " 0\n";
+  } else {
+    out << "0 0 ";
+    out.integer(static_cast<long long>(faces.size())) << ' ';
+    out.integer(static_cast<long long>(entity_tags.size())) << '\n';
+  }
+  for (int f : faces) {
+    EntityBox<Dim> box;
+    for (const mesh::CellFacet& facet : sets.facets[static_cast<std::size_t>(f)])
+      for (LocalId n : facet_nodes(m, facet)) box.add(m, n);
+    out.integer(f + 1);
+    write_box(box);
+    out << " 1 ";
+    out.integer(face_physical_base + f) << " 0\n";
+  }
   for (std::size_t g = 0; g < entity_tags.size(); ++g) {
-    double lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
-    if (!placeholder_entity) {
-      for (int d = 0; d < Dim; ++d) {
-        lo[d] = std::numeric_limits<double>::infinity();
-        hi[d] = -std::numeric_limits<double>::infinity();
-      }
+    EntityBox<Dim> box;
+    if (!placeholder_entity)
       for (std::size_t i = groups.begin[g]; i < groups.begin[g + 1]; ++i) {
         const LocalId* corners = m.cell(groups.order[i]);
-        for (int k = 0; k < kCorners; ++k)
-          for (int d = 0; d < Dim; ++d) {
-            const double x = m.coords[static_cast<std::size_t>(corners[k]) * Dim + d];
-            lo[d] = std::min(lo[d], x);
-            hi[d] = std::max(hi[d], x);
-          }
+        for (int k = 0; k < kCorners; ++k) box.add(m, corners[k]);
       }
-    }
     out.integer(entity_tags[g]);
-    for (double x : lo) out << ' ', out.real(x);
-    for (double x : hi) out << ' ', out.real(x);
+    write_box(box);
     if (placeholder_entity)
       out << " 0 0\n";
     else
@@ -318,12 +393,14 @@ void write_msh_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m,
   }
   out << "$EndNodes\n";
 
-  // Element tag = cell index + 1, so that reading restores the original order.
+  // Element tag = cell index + 1, so that reading restores the original order; the
+  // boundary lines / triangles follow, face by face.
+  const std::size_t elements = cells + facet_total;
   out << "$Elements\n";
-  out.integer(static_cast<long long>(groups.ids.size())) << ' ';
-  out.integer(static_cast<long long>(cells)) << ' ';
-  out.integer(cells > 0 ? 1 : 0) << ' ';
-  out.integer(static_cast<long long>(cells)) << '\n';
+  out.integer(static_cast<long long>(groups.ids.size() + faces.size())) << ' ';
+  out.integer(static_cast<long long>(elements)) << ' ';
+  out.integer(elements > 0 ? 1 : 0) << ' ';
+  out.integer(static_cast<long long>(elements)) << '\n';
   for (std::size_t g = 0; g < groups.ids.size(); ++g) {
     out.integer(Dim) << ' ';
     out.integer(groups.ids[g]) << (Dim == 2 ? " 2 " : " 4 ");
@@ -333,6 +410,18 @@ void write_msh_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m,
       out.integer(static_cast<long long>(c + 1));
       const LocalId* corners = m.cell(c);
       for (int k = 0; k < kCorners; ++k) out << ' ', out.integer(corners[k] + 1LL);
+      out << '\n';
+    }
+  }
+  std::size_t tag = cells;
+  for (int f : faces) {
+    const auto& facets = sets.facets[static_cast<std::size_t>(f)];
+    out.integer(Dim - 1) << ' ';
+    out.integer(f + 1) << (Dim == 2 ? " 1 " : " 2 ");
+    out.integer(static_cast<long long>(facets.size())) << '\n';
+    for (const mesh::CellFacet& facet : facets) {
+      out.integer(static_cast<long long>(++tag));
+      for (LocalId n : facet_nodes(m, facet)) out << ' ', out.integer(n + 1LL);
       out << '\n';
     }
   }
@@ -355,12 +444,36 @@ std::string abaqus_label(const std::string& name) {
   return label.substr(0, 80);
 }
 
+// Abaqus face ids of the facet opposite local vertex v (mesh::FacetVertices): C3D4
+// S1 = (1,2,3), S2 = (1,4,2), S3 = (2,4,3), S4 = (3,4,1); CPS3/CPE3 S1 = (1,2), S2 = (2,3),
+// S3 = (3,1) (1-based element nodes).
+template <int Dim>
+struct AbaqusFaceOf;
+template <>
+struct AbaqusFaceOf<2> {
+  static constexpr int id[3] = {2, 3, 1};
+};
+template <>
+struct AbaqusFaceOf<3> {
+  static constexpr int id[4] = {3, 4, 2, 1};
+};
+
+// Abaqus data lines hold at most 16 entries.
+void write_id_lines(TextWriter& out, const std::vector<long long>& ids) {
+  for (std::size_t i = 0; i < ids.size(); ++i) {
+    out.integer(ids[i]);
+    out << ((i % 16 == 15 || i + 1 == ids.size()) ? "\n" : ", ");
+  }
+}
+
 template <int Dim>
 void write_inp_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m,
-                    const std::vector<geometry::Phase>& phases) {
+                    const std::vector<geometry::Phase>& phases, const MeshWriteOptions& options) {
   constexpr int kCorners = Dim + 1;
+  constexpr int kFaces = mesh::box_face_count(Dim);
   const std::size_t nodes = m.node_count(), cells = m.cell_count();
   const PhaseGroups groups = group_by_phase(m.cell_phase);
+  const char* element_type = Dim == 3 ? "C3D4" : options.plane == PlaneKind::strain ? "CPE3" : "CPS3";
   TextWriter out(file);
   out << "*HEADING\ncisamr mesh: ";
   out.integer(static_cast<long long>(nodes)) << " nodes, ";
@@ -377,8 +490,7 @@ void write_inp_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m,
     // Our reader takes the phase id and full name from this comment; Abaqus ignores it.
     out << "** cisamr phase ";
     out.integer(groups.ids[g]) << ' ' << name << '\n';
-    out << (Dim == 2 ? "*ELEMENT, TYPE=CPS3, ELSET=" : "*ELEMENT, TYPE=C3D4, ELSET=")
-        << abaqus_label(name) << '\n';
+    out << "*ELEMENT, TYPE=" << element_type << ", ELSET=" << abaqus_label(name) << '\n';
     for (std::size_t i = groups.begin[g]; i < groups.begin[g + 1]; ++i) {
       const std::size_t c = groups.order[i];
       out.integer(static_cast<long long>(c + 1));
@@ -387,18 +499,67 @@ void write_inp_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m,
       out << '\n';
     }
   }
+
+  // Boundary sets (DESIGN.md §7); a face no node lies on (a void covers it) has none.
+  const mesh::BoundarySets<Dim> sets = boundary_sets_for(m, options);
+  std::vector<long long> ids;
+  for (int f = 0; f < kFaces; ++f) {
+    ids.clear();
+    for (std::size_t n = 0; n < nodes; ++n)
+      if ((sets.node_faces[n] >> f) & 1) ids.push_back(static_cast<long long>(n + 1));
+    if (ids.empty()) continue;
+    out << "*NSET, NSET=" << mesh::kBoxFaceNames[static_cast<std::size_t>(f)] << '\n';
+    write_id_lines(out, ids);
+  }
+  if (sets.corner0 >= 0) {
+    out << "*NSET, NSET=CORNER0\n";
+    out.integer(sets.corner0 + 1LL) << '\n';
+  }
+  // Element-face surfaces: per face, one ELSET per Abaqus face id that occurs
+  // (<FACE>_S<k>), then *SURFACE <FACE>_FACES listing them.
+  for (int f = 0; f < kFaces; ++f) {
+    const auto& facets = sets.facets[static_cast<std::size_t>(f)];
+    if (facets.empty()) continue;
+    const std::string face(mesh::kBoxFaceNames[static_cast<std::size_t>(f)]);
+    std::vector<int> used;
+    for (int k = 1; k <= kCorners; ++k) {
+      ids.clear();
+      for (const mesh::CellFacet& facet : facets)
+        if (AbaqusFaceOf<Dim>::id[facet.opposite] == k) ids.push_back(facet.cell + 1);
+      if (ids.empty()) continue;
+      used.push_back(k);
+      out << "*ELSET, ELSET=" << face << "_S";
+      out.integer(k) << '\n';
+      write_id_lines(out, ids);
+    }
+    out << "*SURFACE, TYPE=ELEMENT, NAME=" << face << "_FACES\n";
+    for (int k : used) {
+      out << face << "_S";
+      out.integer(k) << ", S";
+      out.integer(k) << '\n';
+    }
+  }
   out.flush();
 }
 
 // ------------------------------------------------------------------------------ Medit
 
 template <int Dim>
-void write_medit_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m) {
+void write_medit_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m,
+                      const std::vector<geometry::Phase>& phases, const MeshWriteOptions& options) {
   constexpr int kCorners = Dim + 1;
+  constexpr int kFaces = mesh::box_face_count(Dim);
   const std::size_t nodes = m.node_count(), cells = m.cell_count();
   TextWriter out(file);
   out << "MeshVersionFormatted 2\n\nDimension ";
-  out.integer(Dim) << "\n\nVertices\n";
+  out.integer(Dim) << '\n';
+  for (const geometry::Phase& p : phases_in_id_order(phases, m.cell_phase)) {
+    std::string name = p.name;
+    std::replace(name.begin(), name.end(), '\n', ' ');
+    out << "# phase ";
+    out.integer(p.id) << ' ' << name << '\n';
+  }
+  out << "\nVertices\n";
   out.integer(static_cast<long long>(nodes)) << '\n';
   for (std::size_t n = 0; n < nodes; ++n) {
     for (int d = 0; d < Dim; ++d) out.real(m.coords[n * Dim + d]) << ' ';
@@ -410,6 +571,19 @@ void write_medit_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m) {
     const LocalId* corners = m.cell(c);
     for (int k = 0; k < kCorners; ++k) out.integer(corners[k] + 1LL) << ' ';
     out.integer(m.cell_phase[c]) << '\n';
+  }
+  // Boundary edges (2D) or triangles (3D) on the box faces, reference face + 1.
+  const mesh::BoundarySets<Dim> sets = boundary_sets_for(m, options);
+  std::size_t facet_total = 0;
+  for (const auto& facets : sets.facets) facet_total += facets.size();
+  if (facet_total > 0) {
+    out << (Dim == 2 ? "\nEdges\n" : "\nTriangles\n");
+    out.integer(static_cast<long long>(facet_total)) << '\n';
+    for (int f = 0; f < kFaces; ++f)
+      for (const mesh::CellFacet& facet : sets.facets[static_cast<std::size_t>(f)]) {
+        for (LocalId n : facet_nodes(m, facet)) out.integer(n + 1LL) << ' ';
+        out.integer(f + 1) << '\n';
+      }
   }
   out << "\nEnd\n";
   out.flush();
@@ -436,10 +610,10 @@ MeshFormat mesh_format_of(const std::string& path) {
 
 template <int Dim>
 void write_vtu(const std::string& path, const mesh::SimplexMesh<Dim>& m,
-               const MeshWriteOptions& options) {
+               const std::vector<geometry::Phase>& phases, const MeshWriteOptions& options) {
   check_mesh(m);
   AtomicFile file(path);
-  write_vtu_file(file, m, options);
+  write_vtu_file(file, m, phases, options);
   file.commit();
 }
 
@@ -450,10 +624,10 @@ void write_mesh(const std::string& path, const mesh::SimplexMesh<Dim>& m,
   check_mesh(m);
   AtomicFile file(path);
   switch (format) {
-    case MeshFormat::vtu: write_vtu_file(file, m, options); break;
-    case MeshFormat::msh: write_msh_file(file, m, phases); break;
-    case MeshFormat::inp: write_inp_file(file, m, phases); break;
-    case MeshFormat::medit: write_medit_file(file, m); break;
+    case MeshFormat::vtu: write_vtu_file(file, m, phases, options); break;
+    case MeshFormat::msh: write_msh_file(file, m, phases, options); break;
+    case MeshFormat::inp: write_inp_file(file, m, phases, options); break;
+    case MeshFormat::medit: write_medit_file(file, m, phases, options); break;
   }
   file.commit();
 }
@@ -462,7 +636,30 @@ template void write_mesh<2>(const std::string&, const mesh::Mesh2&,
                             const std::vector<geometry::Phase>&, const MeshWriteOptions&);
 template void write_mesh<3>(const std::string&, const mesh::Mesh3&,
                             const std::vector<geometry::Phase>&, const MeshWriteOptions&);
-template void write_vtu<2>(const std::string&, const mesh::Mesh2&, const MeshWriteOptions&);
-template void write_vtu<3>(const std::string&, const mesh::Mesh3&, const MeshWriteOptions&);
+template void write_vtu<2>(const std::string&, const mesh::Mesh2&, const std::vector<geometry::Phase>&,
+                           const MeshWriteOptions&);
+template void write_vtu<3>(const std::string&, const mesh::Mesh3&, const std::vector<geometry::Phase>&,
+                           const MeshWriteOptions&);
+
+std::string pvtu_text(const std::vector<std::string>& pieces) {
+  // The arrays write_vtu_file declares (field data is read from the pieces).
+  std::string xml;
+  xml += "<?xml version=\"1.0\"?>\n";
+  xml += "<VTKFile type=\"PUnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n";
+  xml += "  <PUnstructuredGrid GhostLevel=\"0\">\n";
+  xml += "    <PPointData>\n";
+  xml += "      <PDataArray type=\"Int64\" Name=\"global_id\"/>\n";
+  xml += "      <PDataArray type=\"UInt8\" Name=\"boundary\"/>\n";
+  xml += "    </PPointData>\n";
+  xml += "    <PCellData Scalars=\"phase\">\n";
+  xml += "      <PDataArray type=\"Int32\" Name=\"phase\"/>\n";
+  xml += "      <PDataArray type=\"Int32\" Name=\"partition\"/>\n";
+  xml += "      <PDataArray type=\"Float64\" Name=\"aspect_ratio\"/>\n";
+  xml += "    </PCellData>\n";
+  xml += "    <PPoints>\n      <PDataArray type=\"Float64\" Name=\"Points\" NumberOfComponents=\"3\"/>\n    </PPoints>\n";
+  for (const std::string& piece : pieces) xml += "    <Piece Source=\"" + piece + "\"/>\n";
+  xml += "  </PUnstructuredGrid>\n</VTKFile>\n";
+  return xml;
+}
 
 }  // namespace cisamr::io

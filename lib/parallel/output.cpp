@@ -17,42 +17,23 @@ std::string piece_path(const std::string& pvtu_path, int rank) {
   return (p.parent_path() / (stem + "_" + std::to_string(rank) + ".vtu")).string();
 }
 
-namespace {
-
-std::string pvtu_text(const std::string& pvtu_path, int ranks) {
-  std::string xml;
-  xml += "<?xml version=\"1.0\"?>\n";
-  xml += "<VTKFile type=\"PUnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n";
-  xml += "  <PUnstructuredGrid GhostLevel=\"0\">\n";
-  xml += "    <PPointData>\n      <PDataArray type=\"Int64\" Name=\"global_id\"/>\n    </PPointData>\n";
-  xml += "    <PCellData Scalars=\"phase\">\n";
-  xml += "      <PDataArray type=\"Int32\" Name=\"phase\"/>\n";
-  xml += "      <PDataArray type=\"Int32\" Name=\"partition\"/>\n";
-  xml += "      <PDataArray type=\"Float64\" Name=\"aspect_ratio\"/>\n";
-  xml += "    </PCellData>\n";
-  xml += "    <PPoints>\n      <PDataArray type=\"Float64\" Name=\"Points\" NumberOfComponents=\"3\"/>\n    </PPoints>\n";
-  for (int r = 0; r < ranks; ++r)
-    xml += "    <Piece Source=\"" + fs::path(piece_path(pvtu_path, r)).filename().string() + "\"/>\n";
-  xml += "  </PUnstructuredGrid>\n</VTKFile>\n";
-  return xml;
-}
-
-}  // namespace
-
 template <int Dim>
-void write_pvtu(const Comm& comm, const std::string& pvtu_path, const mesh::SimplexMesh<Dim>& piece) {
+void write_pvtu(const Comm& comm, const std::string& pvtu_path, const mesh::SimplexMesh<Dim>& piece,
+                const std::vector<geometry::Phase>& phases, const io::MeshWriteOptions& options) {
   // Joins the caller's io::OutputSet when one is open; otherwise the pieces and the .pvtu
   // are renamed into place together once every rank has written.
   io::OutputSet outputs;
   run_collectively(comm, [&] {
     if (fs::path(pvtu_path).extension() != ".pvtu")
       throw InputError(pvtu_path, "", "a parallel output must end in .pvtu");
-    io::write_vtu(piece_path(pvtu_path, comm.rank()), piece);
+    io::write_vtu(piece_path(pvtu_path, comm.rank()), piece, phases, options);
   });
   run_collectively(comm, [&] {
     if (comm.rank() != 0) return;
     io::AtomicFile file(pvtu_path);
-    file.write(pvtu_text(pvtu_path, comm.size()));
+    std::vector<std::string> pieces;
+    for (int r = 0; r < comm.size(); ++r) pieces.push_back(fs::path(piece_path(pvtu_path, r)).filename().string());
+    file.write(io::pvtu_text(pieces));
     file.commit();
   });
   run_collectively(comm, [&] { outputs.commit(); });
@@ -66,8 +47,10 @@ void write_gathered(const Comm& comm, const std::string& path, const mesh::Simpl
   });
 }
 
-template void write_pvtu<2>(const Comm&, const std::string&, const mesh::SimplexMesh<2>&);
-template void write_pvtu<3>(const Comm&, const std::string&, const mesh::SimplexMesh<3>&);
+template void write_pvtu<2>(const Comm&, const std::string&, const mesh::SimplexMesh<2>&,
+                            const std::vector<geometry::Phase>&, const io::MeshWriteOptions&);
+template void write_pvtu<3>(const Comm&, const std::string&, const mesh::SimplexMesh<3>&,
+                            const std::vector<geometry::Phase>&, const io::MeshWriteOptions&);
 template void write_gathered<2>(const Comm&, const std::string&, const mesh::SimplexMesh<2>&,
                                 const std::vector<geometry::Phase>&, const io::MeshWriteOptions&, int);
 template void write_gathered<3>(const Comm&, const std::string&, const mesh::SimplexMesh<3>&,

@@ -21,8 +21,11 @@ std::string piece_path(const std::string& pvtu_path, int rank);
 // inside an io::OutputSet: once every rank has written, every rank renames its files into
 // place (inside a caller's open OutputSet, the caller's commit does). A failure anywhere
 // deletes what this call wrote on every rank and is thrown on every rank (collective.hpp).
+// The pieces' boundary bits refer to `options.face_box`: give the whole domain's (unset,
+// each piece's own bounding box would be taken).
 template <int Dim>
-void write_pvtu(const Comm& comm, const std::string& pvtu_path, const mesh::SimplexMesh<Dim>& piece);
+void write_pvtu(const Comm& comm, const std::string& pvtu_path, const mesh::SimplexMesh<Dim>& piece,
+                const std::vector<geometry::Phase>& phases = {}, const io::MeshWriteOptions& options = {});
 inline void write_pvtu2(const Comm& comm, const std::string& pvtu_path, const mesh::Mesh2& piece) {
   write_pvtu<2>(comm, pvtu_path, piece);
 }

@@ -213,7 +213,9 @@ TEST(MeshIo, MshDeclaresOnePhysicalGroupPerPhase) {
   write_mesh(dir.file("m.msh"), grid_mesh2(3, 3), kPhases);
   const std::string text = read_text(dir.file("m.msh"));
   EXPECT_EQ(text.rfind("$MeshFormat\n4.1 0 8\n$EndMeshFormat\n", 0), 0u);
-  EXPECT_NE(text.find("$PhysicalNames\n3\n2 1 \"matrix\"\n2 2 \"glass fiber\"\n2 5 \"pore\"\n"),
+  // The phases, then the box faces (dimension 1, tags past the largest phase id).
+  EXPECT_NE(text.find("$PhysicalNames\n7\n2 1 \"matrix\"\n2 2 \"glass fiber\"\n2 5 \"pore\"\n"
+                      "1 6 \"XMIN\"\n1 7 \"XMAX\"\n1 8 \"YMIN\"\n1 9 \"YMAX\"\n"),
             std::string::npos);
   EXPECT_EQ(text.find("unused"), std::string::npos);
 }
