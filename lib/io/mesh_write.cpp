@@ -60,6 +60,18 @@ class TextWriter {
         buffer_.data());
     return *this;
   }
+  // The shortest round-trip text when it has at most `width` characters, else scientific
+  // notation with as many digits as fit (Abaqus and CalculiX read numbers of at most 20
+  // characters; only magnitudes below about 1e-4 or above 1e16 need the second form).
+  TextWriter& real_within(double value, int width) {
+    make_room();
+    char* at = buffer_.data() + used_;
+    char* end = std::to_chars(at, buffer_.data() + buffer_.size(), value).ptr;
+    for (int digits = 16; end - at > width && digits >= 0; --digits)
+      end = std::to_chars(at, buffer_.data() + buffer_.size(), value, std::chars_format::scientific, digits).ptr;
+    used_ = static_cast<std::size_t>(end - buffer_.data());
+    return *this;
+  }
   void flush() {
     file_.write(buffer_.data(), used_);
     used_ = 0;
@@ -458,6 +470,9 @@ struct AbaqusFaceOf<3> {
   static constexpr int id[4] = {3, 4, 2, 1};
 };
 
+// Abaqus input rules: at most 16 entries per data line, numbers of at most 20 characters.
+constexpr int kAbaqusNumberWidth = 20;
+
 // Abaqus data lines hold at most 16 entries.
 void write_id_lines(TextWriter& out, const std::vector<long long>& ids) {
   for (std::size_t i = 0; i < ids.size(); ++i) {
@@ -481,7 +496,7 @@ void write_inp_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m,
   out << "*NODE\n";
   for (std::size_t n = 0; n < nodes; ++n) {
     out.integer(static_cast<long long>(n + 1));
-    for (int d = 0; d < Dim; ++d) out << ", ", out.real(m.coords[n * Dim + d]);
+    for (int d = 0; d < Dim; ++d) out << ", ", out.real_within(m.coords[n * Dim + d], kAbaqusNumberWidth);
     out << '\n';
   }
   for (std::size_t g = 0; g < groups.ids.size(); ++g) {
