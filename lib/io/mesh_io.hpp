@@ -5,7 +5,8 @@
 //   .vtu   VTK XML UnstructuredGrid, raw appended binary (UInt64 headers, little endian):
 //          cell data phase (Int32), partition (Int32), aspect_ratio (Float64);
 //          point data global_id (Int64), boundary (UInt8, bit f: on box face f); points
-//          always with 3 components.
+//          always with 3 components; field data phase_names (VTK String array, ASCII) and
+//          phase_ids (Int32), in phase-id order.
 //   .msh   Gmsh 4.1 ASCII: one physical group and one entity per phase (tag = phase id);
 //          per box face a curve (2D) or surface (3D) entity with its boundary lines or
 //          triangles, in a physical group named XMIN ... ZMAX.
@@ -49,7 +50,7 @@ struct MeshWriteOptions {
 };
 
 // Writes `m` in the format of `path`'s extension (or options.format). `phases` gives the names (msh physical
-// names, inp ELSET names, Medit comments); a phase id used by a cell but
+// names, inp ELSET names, vtu phase_names, Medit comments); a phase id used by a cell but
 // missing there is named "phase<id>". Empty cell_partition / node_global_id are written as 0 / the node index.
 // Throws InputError for an unknown extension or an unwritable path; the destination is
 // either the complete new file or untouched.

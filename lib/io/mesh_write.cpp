@@ -184,6 +184,17 @@ void write_array_raw(AtomicFile& file, const std::vector<T>& values) {
   file.write(values.data(), bytes);
 }
 
+// The VTK ASCII encoding of a string array: each string's bytes as decimal integers, then 0.
+std::string vtk_string_values(const std::vector<geometry::Phase>& phases) {
+  std::string text;
+  for (const auto& p : phases) {
+    for (unsigned char c : p.name) text += std::to_string(static_cast<unsigned>(c)) + ' ';
+    text += "0 ";
+  }
+  if (!text.empty()) text.pop_back();
+  return text;
+}
+
 template <int Dim>
 void write_vtu_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m,
                     const std::vector<geometry::Phase>& phases, const MeshWriteOptions& options) {
@@ -219,6 +230,18 @@ void write_vtu_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m,
   xml += "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" "
          "header_type=\"UInt64\">\n";
   xml += "  <UnstructuredGrid>\n";
+  // Phase names (VTK string array, ASCII) and their ids, in id order.
+  const std::vector<geometry::Phase> named = phases_in_id_order(phases, m.cell_phase);
+  const std::string tuples = " NumberOfTuples=\"" + std::to_string(named.size()) + "\" format=\"ascii\">\n";
+  xml += "    <FieldData>\n";
+  xml += "      <DataArray type=\"String\" Name=\"phase_names\"" + tuples;
+  xml += "        " + vtk_string_values(named) + "\n      </DataArray>\n";
+  xml += "      <DataArray type=\"Int32\" Name=\"phase_ids\"" + tuples + "        ";
+  for (std::size_t i = 0; i < named.size(); ++i) {
+    if (i > 0) xml += ' ';
+    xml += std::to_string(named[i].id);
+  }
+  xml += "\n      </DataArray>\n    </FieldData>\n";
   xml += "    <Piece NumberOfPoints=\"" + std::to_string(nodes) + "\" NumberOfCells=\"" +
          std::to_string(cells) + "\">\n";
   // The appended blocks are laid out in the reverse of the declaration order. VTK does not

@@ -42,12 +42,19 @@ scene = json.load(open(scene_path))
 dim = scene["dimension"]
 faces = FACES[:2 * dim]
 
-# VTU (VTK's reader): the bits.
+# VTU (VTK's reader): the bits, and the phase names as field data.
 grid = read_vtk(stem + ".vtu")
 points = vtk_to_numpy(grid.GetPoints().GetData())[:, :dim]
 bits = vtk_to_numpy(grid.GetPointData().GetArray("boundary"))
 node_counts = {f: int(((bits >> k) & 1).sum()) for k, f in enumerate(faces)}
 check(all(node_counts[f] > 0 for f in faces), f"vtu: a face without nodes: {node_counts}")
+names = grid.GetFieldData().GetAbstractArray("phase_names")
+ids = grid.GetFieldData().GetArray("phase_ids")
+check(names is not None and ids is not None, "vtu: no phase_names / phase_ids field data")
+if names is not None and ids is not None:
+    got = {int(ids.GetValue(i)): names.GetValue(i) for i in range(names.GetNumberOfValues())}
+    want = {p["id"]: p["name"] for p in scene["phases"]}
+    check(got == want, f"vtu: phase names {got}, scene {want}")
 lo, hi = points.min(axis=0), points.max(axis=0)
 for k, f in enumerate(faces):
     axis, side = divmod(k, 2)
