@@ -13,21 +13,14 @@
 #include <vector>
 
 #include "core/types.hpp"
+#include "mesh/boundary.hpp"
 #include "mesh/simplex_mesh.hpp"
 
 namespace cisamr::quality::detail {
 
+// The one table of facet vertices (mesh/boundary.hpp), which the writers' boundary sets use.
 template <int Dim>
-struct FacetTable;
-
-template <>
-struct FacetTable<2> {
-  static constexpr int local[3][2] = {{1, 2}, {2, 0}, {0, 1}};
-};
-template <>
-struct FacetTable<3> {
-  static constexpr int local[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
-};
+using FacetTable = mesh::FacetVertices<Dim>;
 
 // One occurrence of a facet: which cell, which local facet, and whether its listed order
 // is an odd permutation of the ascending one.
