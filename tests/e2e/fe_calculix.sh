@@ -58,6 +58,41 @@ for mesh in m3 stress strain; do
   check "$dir/r.json" "$bounded" "$mesh, two materials: between the bounds"
 done
 
+# The element-face surfaces: a pressure on XMAX_FACES, YMAX_FACES (and ZMAX_FACES) comes
+# back as p × face area in the reactions of XMIN, YMIN (and ZMIN), which a wrong Abaqus
+# face id (S1-S4, S1-S3) would spread over the wrong element faces.
+surface_job() {  # MESH SECTION_DATA_LINE DIM
+  echo "*INCLUDE, INPUT=$1"
+  echo "*MATERIAL, NAME=M1"; echo "*ELASTIC"; echo "1000, 0.3"
+  for set in $(sed -n 's/^\*ELEMENT.*ELSET=\(.*\)$/\1/p' "$dir/$1"); do
+    echo "*SOLID SECTION, ELSET=$set, MATERIAL=M1"; [ -z "$2" ] || echo "$2"
+  done
+  echo "*STEP"; echo "*STATIC"; echo "*BOUNDARY"; echo "XMIN, 1, 1, 0"; echo "YMIN, 2, 2, 0"
+  [ "$3" = 3 ] && echo "ZMIN, 3, 3, 0"
+  echo "*DLOAD"; echo "XMAX_FACES, P, -2.0"; echo "YMAX_FACES, P, -3.0"
+  [ "$3" = 3 ] && echo "ZMAX_FACES, P, -5.0"
+  for set in XMIN YMIN ZMIN; do [ $set = ZMIN ] && [ "$3" = 2 ] && continue; echo "*NODE PRINT, NSET=$set, TOTALS=ONLY"; echo "RF"; done
+  echo "*END STEP"
+}
+# reactions JOB.dat EXPECTED...: the total force component k of the k-th set printed.
+reactions() {
+  /usr/bin/python3 -c 'import re, sys
+text = open(sys.argv[1]).read()
+totals = [list(map(float, m.group(1).split()))
+          for m in re.finditer(r"total force \(fx,fy,fz\) for set \S+ and time.*\n\s*\n(.*)\n", text)]
+want = [float(x) for x in sys.argv[2:]]
+got = [totals[k][k] for k in range(len(want))] if len(totals) == len(want) else []
+ok = len(got) == len(want) and all(abs(g - w) <= 1e-9 * abs(w) for g, w in zip(got, want))
+print(("ok  " if ok else "FAIL") + " face surfaces: reactions", got, "expected", want)
+sys.exit(0 if ok else 1)' "$@"
+}
+surface_job m3.inp "" 3 > "$dir/p3.inp"
+(cd "$dir" && OMP_NUM_THREADS=1 ccx -i p3 > p3.log 2>&1) && ! grep -q "ERROR" "$dir/p3.log" || fail "3D surface job"
+reactions "$dir/p3.dat" -0.08 -0.18 -0.3 || fail "3D element-face surfaces"   # p × 0.2·0.2, 0.3·0.2, 0.3·0.2
+surface_job stress.inp 0.5 2 > "$dir/p2.inp"
+(cd "$dir" && OMP_NUM_THREADS=1 ccx -i p2 > p2.log 2>&1) && ! grep -q "ERROR" "$dir/p2.log" || fail "2D surface job"
+reactions "$dir/p2.dat" -0.7 -1.2 || fail "2D element-face surfaces"   # p × 0.7·0.5, 0.8·0.5
+
 # Bad input: one line, exit 2.
 /usr/bin/python3 "$fe" uniaxial "$dir/m3.inp" --material matrix=1000,0.3 > /dev/null 2> "$dir/err.txt"
 [ $? -eq 2 ] && grep -q "no material given" "$dir/err.txt" || fail "a phase without a material is not a clear error"
