@@ -185,11 +185,15 @@ void write_array_raw(AtomicFile& file, const std::vector<T>& values) {
 }
 
 // The VTK ASCII encoding of a string array: each string's bytes as decimal integers, then 0.
-std::string vtk_string_values(const std::vector<geometry::Phase>& phases) {
+// The phase names as one byte array, each name followed by a 0 byte. A UInt8 array rather
+// than VTK's String type because meshio (5.x, 7.x) refuses every file holding a String array.
+std::string phase_name_bytes(const std::vector<geometry::Phase>& phases, std::size_t& count) {
   std::string text;
+  count = 0;
   for (const auto& p : phases) {
     for (unsigned char c : p.name) text += std::to_string(static_cast<unsigned>(c)) + ' ';
     text += "0 ";
+    count += p.name.size() + 1;
   }
   if (!text.empty()) text.pop_back();
   return text;
@@ -230,12 +234,15 @@ void write_vtu_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m,
   xml += "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" "
          "header_type=\"UInt64\">\n";
   xml += "  <UnstructuredGrid>\n";
-  // Phase names (VTK string array, ASCII) and their ids, in id order.
+  // Phase names (bytes, each name ended by 0) and their ids, in id order.
   const std::vector<geometry::Phase> named = phases_in_id_order(phases, m.cell_phase);
+  std::size_t name_bytes = 0;
+  const std::string name_values = phase_name_bytes(named, name_bytes);
   const std::string tuples = " NumberOfTuples=\"" + std::to_string(named.size()) + "\" format=\"ascii\">\n";
   xml += "    <FieldData>\n";
-  xml += "      <DataArray type=\"String\" Name=\"phase_names\"" + tuples;
-  xml += "        " + vtk_string_values(named) + "\n      </DataArray>\n";
+  xml += "      <DataArray type=\"UInt8\" Name=\"phase_names\" NumberOfTuples=\"" + std::to_string(name_bytes) +
+         "\" format=\"ascii\">\n";
+  xml += "        " + name_values + "\n      </DataArray>\n";
   xml += "      <DataArray type=\"Int32\" Name=\"phase_ids\"" + tuples + "        ";
   for (std::size_t i = 0; i < named.size(); ++i) {
     if (i > 0) xml += ' ';

@@ -1,6 +1,6 @@
 #!/bin/bash
 # Boundary sets through the command line, read back by independent readers
-# (boundary_sets_check.py: meshio for .inp/.msh/.mesh, VTK for .vtu/.pvtu): 2D and 3D,
+# (boundary_sets_check.py: meshio for .inp/.msh/.mesh/.vtu, VTK for .vtu/.pvtu): 2D and 3D,
 # sequential, --partitions N and under mpiexec (pieces and --gather); gmsh accepts the
 # .msh with its face entities and physical groups; --plane picks CPE3/CPS3.
 # usage: boundary_sets.sh CISAMR SOURCE_DIR [MPIEXEC]

@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """Reads the boundary sets of one mesh written in every format with independent readers
-(meshio for .inp/.msh/.mesh, VTK for .vtu/.pvtu) and checks that they agree.
+(meshio for .inp/.msh/.mesh/.vtu, VTK for .vtu/.pvtu) and checks that they agree.
 
     boundary_sets_check.py SCENE.json STEM [PVTU...]
 
@@ -51,10 +51,25 @@ check(all(node_counts[f] > 0 for f in faces), f"vtu: a face without nodes: {node
 names = grid.GetFieldData().GetAbstractArray("phase_names")
 ids = grid.GetFieldData().GetArray("phase_ids")
 check(names is not None and ids is not None, "vtu: no phase_names / phase_ids field data")
+want_names = {p["id"]: p["name"] for p in scene["phases"]}
+
+
+def names_by_id(name_bytes, phase_ids):
+    """The names' bytes, each name ended by 0, paired with the ids in order."""
+    split = bytes(int(b) for b in name_bytes).split(b"\0")[:-1]
+    return {int(i): n.decode("utf-8") for i, n in zip(phase_ids, split)}
+
+
 if names is not None and ids is not None:
-    got = {int(ids.GetValue(i)): names.GetValue(i) for i in range(names.GetNumberOfValues())}
-    want = {p["id"]: p["name"] for p in scene["phases"]}
-    check(got == want, f"vtu: phase names {got}, scene {want}")
+    got = names_by_id(vtk_to_numpy(names), vtk_to_numpy(ids))
+    check(got == want_names, f"vtu: phase names {got}, scene {want_names}")
+
+# VTU (meshio): the same bits, phases and names.
+vtu = meshio.read(stem + ".vtu")
+check(numpy.array_equal(vtu.point_data["boundary"], bits), "meshio vtu: boundary bits differ from VTK's")
+check(sum(len(c) for c in vtu.cell_data["phase"]) == grid.GetNumberOfCells(), "meshio vtu: phase count")
+got = names_by_id(vtu.field_data["phase_names"], vtu.field_data["phase_ids"])
+check(got == want_names, f"meshio vtu: phase names {got}, scene {want_names}")
 lo, hi = points.min(axis=0), points.max(axis=0)
 for k, f in enumerate(faces):
     axis, side = divmod(k, 2)
