@@ -160,4 +160,16 @@ if [ -n "$mpiexec" ]; then
   [ "$(grep '^mesh:' out.txt | cut -d: -f3)" = "$(grep '^mesh:' ours.txt | cut -d: -f3)" ] \
     || fail "p.pvtu: the pieces' shared nodes were not merged: $(grep '^mesh:' out.txt ours.txt)"
 fi
+# --- A mesh with a void certifies without a scene (its hole is taken for a void). ---------
+cat > void.json <<'EOF'
+{"format": "cisamr-scene/1", "dimension": 2, "domain": {"min": [0, 0], "max": [1, 1]},
+ "mesh": {"h": 0.1, "levels": 1}, "phases": [{"id": 1, "name": "matrix"}, {"id": 2, "name": "pore", "void": true}],
+ "matrix_phase": 1, "inclusions": [{"shape": "circle", "center": [0.5, 0.5], "radius": 0.25, "phase": 2}]}
+EOF
+"$cisamr" mesh void.json -o void.msh -q || fail "mesh void.msh"
+"$cisamr" certify void.msh --json void.cert.json > out.txt 2>&1 || { cat out.txt; fail "a mesh with a void does not certify without a scene"; }
+$py -c 'import json, sys
+c = json.load(open(sys.argv[1]))["conformity"]
+assert c["inner_boundary_facets"] > 0 and c["open_facets_inside"] == 0, c' void.cert.json \
+  || fail "the void's boundary was not counted as inner boundary"
 echo "foreign meshes: all certified"
