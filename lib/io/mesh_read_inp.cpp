@@ -40,7 +40,9 @@ struct ElementSets {
     int best = it == first_listing.end() ? -1 : it->second;
     for (const Range& r : ranges)
       if ((best < 0 || r.set < best) && element >= r.first && element <= r.last &&
-          (element - r.first) % r.step == 0)
+          (static_cast<unsigned long long>(element) - static_cast<unsigned long long>(r.first)) %
+                  static_cast<unsigned long long>(r.step) ==
+              0)
         best = r.set;
     return best;
   }
@@ -190,6 +192,10 @@ LoadedMesh read_inp(const std::string& path) {
   std::vector<int> set_id(sets.names.size(), 0);
   std::vector<bool> used(sets.names.size(), false);
   std::vector<TaggedCells::Cell>& kept = cells.tetrahedra.empty() ? cells.triangles : cells.tetrahedra;
+  // Each cell without a block set is tested against every GENERATE range: bounded.
+  if (!sets.ranges.empty() && kept.size() > 2'000'000'000 / sets.ranges.size())
+    throw InputError(path, "*ELSET", std::to_string(sets.ranges.size()) + " GENERATE ranges for " +
+                                         std::to_string(kept.size()) + " elements are too many to resolve");
   bool unset = false;
   for (TaggedCells::Cell& c : kept) {
     if (c.phase < 0) c.phase = sets.listing(c.tag);

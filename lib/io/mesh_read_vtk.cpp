@@ -385,6 +385,11 @@ void parse_ascii(std::string_view text, const VtkType& type, DataValues& out, co
   }
 }
 
+// VTK writes string arrays in FieldData as <Array>.
+bool is_array(const pugi::xml_node& node) {
+  return std::string_view(node.name()) == "DataArray" || std::string_view(node.name()) == "Array";
+}
+
 class VtuReader {
  public:
   VtuReader(std::string_view text, const std::string& path) : text_(text), path_(path) {}
@@ -437,7 +442,7 @@ class VtuReader {
     if (!piece) throw InputError(path_, "Piece", "missing");
     if (piece.next_sibling("Piece"))
       throw InputError(path_, "Piece", "VTU files with several pieces are not supported");
-    collect_appended_offsets(grid);
+    collect_appended_offsets(grid, piece);
 
     GridArrays g;
     // Counts are checked against the arrays, never used to reserve: any size passes here.
@@ -460,8 +465,7 @@ class VtuReader {
     std::vector<std::pair<std::string, DataValues>> field;
     for (const pugi::xml_node holder : {grid.child("FieldData"), piece.child("FieldData")})
       for (const pugi::xml_node a : holder.children()) {
-        // VTK writes string arrays there as <Array>.
-        if (std::string_view(a.name()) != "DataArray" && std::string_view(a.name()) != "Array") continue;
+        if (!is_array(a)) continue;
         const VtkType* t = vtk_type(a.attribute("type").value());
         if (t && !t->is_real) field.emplace_back(a.attribute("Name").value(), decode(a));
       }
@@ -470,13 +474,15 @@ class VtuReader {
   }
 
  private:
-  void collect_appended_offsets(const pugi::xml_node& node) {
-    for (const pugi::xml_node child : node.children()) {
-      if (std::string_view(child.name()) == "DataArray" &&
-          std::string_view(child.attribute("format").value()) == "appended")
-        appended_.offsets.push_back(size_attribute(child, "offset", appended_.data.size(), path_));
-      collect_appended_offsets(child);
-    }
+  // The offsets of the appended arrays of the sections read (not a walk of the whole tree:
+  // a file may nest elements deeper than any stack).
+  void collect_appended_offsets(const pugi::xml_node& grid, const pugi::xml_node& piece) {
+    std::vector<pugi::xml_node> holders = {grid.child("FieldData")};
+    for (const pugi::xml_node section : piece.children()) holders.push_back(section);
+    for (const pugi::xml_node holder : holders)
+      for (const pugi::xml_node a : holder.children())
+        if (is_array(a) && std::string_view(a.attribute("format").value()) == "appended")
+          appended_.offsets.push_back(size_attribute(a, "offset", appended_.data.size(), path_));
     std::sort(appended_.offsets.begin(), appended_.offsets.end());
   }
 
@@ -787,7 +793,9 @@ RawMesh merge_pieces(std::vector<RawMesh>& pieces, const std::string& path) {
   RawMesh merged;
   const bool by_global_id = std::all_of(pieces.begin(), pieces.end(), [](const RawMesh& p) { return !p.node_global_id.empty(); });
   std::unordered_map<GlobalId, LocalId> by_id;
-  std::map<std::array<double, 3>, LocalId> by_position;
+  // Coordinates compared by their bits (0 and -0 as one): NaN must not break the ordering.
+  std::map<std::array<std::uint64_t, 3>, LocalId> by_position;
+  auto bits = [](double x) { return std::bit_cast<std::uint64_t>(x == 0 ? 0.0 : x); };
   bool any_partition = false;
   for (const RawMesh& p : pieces) any_partition = any_partition || !p.cell_partition.empty();
   for (std::size_t k = 0; k < pieces.size(); ++k) {
@@ -804,7 +812,10 @@ RawMesh merge_pieces(std::vector<RawMesh>& pieces, const std::string& path) {
       if (by_global_id) {
         id = by_id.emplace(p.node_global_id[n], next).first->second;
       } else {
-        id = by_position.emplace(std::array<double, 3>{p.coords[3 * n], p.coords[3 * n + 1], p.coords[3 * n + 2]}, next)
+        id = by_position
+                 .emplace(std::array<std::uint64_t, 3>{bits(p.coords[3 * n]), bits(p.coords[3 * n + 1]),
+                                                       bits(p.coords[3 * n + 2])},
+                          next)
                  .first->second;
       }
       if (id == next) {
