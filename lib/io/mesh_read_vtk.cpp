@@ -789,8 +789,13 @@ class LegacyReader {
 
 // Pieces are merged: nodes with the same global_id (when every piece has one), otherwise
 // with exactly the same coordinates, become one node.
-RawMesh merge_pieces(std::vector<RawMesh>& pieces, const std::string& path) {
+RawMesh merge_pieces(std::vector<RawMesh>& pieces, const std::vector<std::string>& piece_paths) {
   RawMesh merged;
+  for (std::size_t k = 0; k < pieces.size(); ++k)  // what finish() checks of the merged mesh, per piece
+    if (!pieces[k].node_global_id.empty() && pieces[k].node_global_id.size() != pieces[k].coords.size() / 3)
+      throw InputError(piece_paths[k], "global_id", "has " + std::to_string(pieces[k].node_global_id.size()) +
+                                                        " values for " + std::to_string(pieces[k].coords.size() / 3) +
+                                                        " points");
   const bool by_global_id = std::all_of(pieces.begin(), pieces.end(), [](const RawMesh& p) { return !p.node_global_id.empty(); });
   std::unordered_map<GlobalId, LocalId> by_id;
   // Coordinates compared by their bits (0 and -0 as one): NaN must not break the ordering.
@@ -802,7 +807,7 @@ RawMesh merge_pieces(std::vector<RawMesh>& pieces, const std::string& path) {
     RawMesh& p = pieces[k];
     if (p.corners == 0) continue;
     if (merged.corners != 0 && p.corners != merged.corners)
-      throw InputError(path, "Piece " + std::to_string(k), "its cells are not of the same kind as the other pieces'");
+      throw InputError(piece_paths[k], "", "its cells are not of the same kind as the other pieces'");
     merged.corners = p.corners;
     const std::size_t nodes = p.coords.size() / 3;
     std::vector<LocalId> local(nodes);
@@ -862,16 +867,18 @@ LoadedMesh read_pvtu(const std::string& path) {
   if (!grid) throw InputError(path, "", "not a parallel VTU file (no <VTKFile><PUnstructuredGrid>)");
   const std::filesystem::path folder = std::filesystem::path(path).parent_path();
   std::vector<RawMesh> pieces;
+  std::vector<std::string> piece_paths;
   for (const pugi::xml_node piece : grid.children("Piece")) {
     const std::string source = piece.attribute("Source").value();
     if (source.empty()) throw InputError(path, "Piece " + std::to_string(pieces.size()), "no Source");
     const std::filesystem::path piece_path = std::filesystem::path(source).is_absolute() ? std::filesystem::path(source) : folder / source;
     if (piece_path.extension() != ".vtu")
       throw InputError(path, "Piece " + std::to_string(pieces.size()), "Source '" + source.substr(0, 80) + "' is not a .vtu file");
-    pieces.push_back(read_vtu_raw(piece_path.string()));
+    piece_paths.push_back(piece_path.string());
+    pieces.push_back(read_vtu_raw(piece_paths.back()));
   }
   if (pieces.empty()) throw InputError(path, "Piece", "no pieces");
-  return finish(merge_pieces(pieces, path), path);
+  return finish(merge_pieces(pieces, piece_paths), path);
 }
 
 }  // namespace cisamr::io::detail

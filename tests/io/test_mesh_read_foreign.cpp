@@ -132,6 +132,25 @@ TEST(ForeignMeshes, PvtuMergesPiecesByGlobalIdOrCoordinates) {
   std::map<std::array<double, 2>, int> seen2;
   for (std::size_t n = 0; n < two.mesh2.coords.size() / 2; ++n)
     EXPECT_EQ((++seen2[{two.mesh2.coords[2 * n], two.mesh2.coords[2 * n + 1]}]), 1) << "node " << n << " twice";
+  // A piece whose global_id array does not have one value per point (found by fuzzing: the
+  // merge indexed past the array).
+  TempDir third;
+  const std::string piece = R"(<VTKFile type="UnstructuredGrid"><UnstructuredGrid><Piece NumberOfPoints="3" NumberOfCells="1">
+<PointData><DataArray type="Int64" Name="global_id" format="ascii">0 1</DataArray></PointData>
+<Points><DataArray type="Float64" NumberOfComponents="3" format="ascii">0 0 0 1 0 0 0 1 0</DataArray></Points>
+<Cells><DataArray type="Int32" Name="connectivity" format="ascii">0 1 2</DataArray>
+<DataArray type="Int32" Name="offsets" format="ascii">3</DataArray>
+<DataArray type="UInt8" Name="types" format="ascii">5</DataArray></Cells>
+</Piece></UnstructuredGrid></VTKFile>)";
+  third.write("a.vtu", piece);
+  const std::string bad = third.write("m.pvtu", R"(<VTKFile type="PUnstructuredGrid"><PUnstructuredGrid>
+<Piece Source="a.vtu"/></PUnstructuredGrid></VTKFile>)");
+  try {
+    read_mesh(bad);
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("a.vtu: global_id: has 2 values for 3 points"), std::string::npos) << e.what();
+  }
   // A missing piece is an error naming it.
   std::filesystem::remove(other.file("piece1.vtu"));
   try {
