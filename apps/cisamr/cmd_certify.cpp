@@ -3,6 +3,7 @@
 // (with --scene) phase fidelity, 2D and 3D. Exit status 3 when the mesh fails, 0 when it passes.
 #include <cstdio>
 #include <exception>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -14,12 +15,13 @@
 #include "io/mesh_io.hpp"
 #include "io/scene_io.hpp"
 #include "quality/certificate.hpp"
+#include "quality/phase_match.hpp"
 
 namespace cisamr::app {
 namespace {
 
 struct CertifyArgs {
-  std::string mesh, scene, html, json;
+  std::string mesh, scene, html, json, phase_map;
   double bound = 0;  // 0: the dimension's bound
   double fidelity_tolerance = -1;  // < 0: 1e-9 of the domain diagonal
 };
@@ -36,8 +38,13 @@ quality::Certificate certify_mesh(const mesh::SimplexMesh<Dim>& mesh, const geom
   if (!scene) {
     ScopedPhase timer(&times, "certify");
     progress(flags, "checking the mesh (domain = its bounding box)");
-    quality::Certificate c = quality::certify<Dim>(mesh, quality::bounding_box(mesh), options);
-    c.notes.push_back("no scene: the domain is the mesh's bounding box and phase fidelity is not checked");
+    // Without a scene a void cannot be told from a hole: open boundaries inside the box are
+    // counted as inner boundary (still checked for hanging nodes), not failed.
+    quality::CertifyOptions o = options;
+    o.allow_inner_boundary = true;
+    quality::Certificate c = quality::certify<Dim>(mesh, quality::bounding_box(mesh), o);
+    c.notes.push_back("no scene: the domain is the mesh's bounding box, phase fidelity is not checked and "
+                      "open boundaries inside it are taken for voids");
     return c;
   }
   progress(flags, "building the geometry oracle");
@@ -50,7 +57,28 @@ quality::Certificate certify_mesh(const mesh::SimplexMesh<Dim>& mesh, const geom
   return quality::certify<Dim>(mesh, oracle, options);
 }
 
-quality::Certificate certify_loaded(const CertifyArgs& args, const io::LoadedMesh& loaded,
+// The mesh's phase ids made the scene's: by --phase-map, by the names the file gives, by number.
+std::string match_scene_phases(const CertifyArgs& args, io::LoadedMesh& loaded, const geometry::SceneDesc& scene) {
+  std::vector<quality::MeshPhase> mesh_phases;
+  for (const geometry::Phase& p : loaded.phases) {
+    const auto named = loaded.phase_names_in_file.find(p.id);
+    mesh_phases.push_back({p.id, named != loaded.phase_names_in_file.end() ? named->second : ""});
+  }
+  const std::map<int, int> scene_id = quality::match_phases(
+      mesh_phases, scene.phases, args.phase_map.empty() ? std::vector<quality::PhaseMapEntry>{}
+                                                        : quality::parse_phase_map(args.phase_map),
+      args.mesh);
+  if (loaded.dimension == 2) quality::relabel_phases<2>(loaded.mesh2, scene_id);
+  else quality::relabel_phases<3>(loaded.mesh3, scene_id);
+  std::string note = "mesh phases matched to the scene:";
+  for (const quality::MeshPhase& m : mesh_phases)
+    note += " " + (m.name.empty() ? std::to_string(m.id) : "'" + m.name + "'") + " -> " +
+            std::to_string(scene_id.at(m.id)) + ",";
+  note.pop_back();
+  return note;
+}
+
+quality::Certificate certify_loaded(const CertifyArgs& args, io::LoadedMesh& loaded,
                                     const GlobalFlags& flags, PhaseTimes& times) {
   quality::CertifyOptions options;
   options.bound = args.bound;
@@ -66,10 +94,16 @@ quality::Certificate certify_loaded(const CertifyArgs& args, const io::LoadedMes
       throw InputError(args.scene, "dimension",
                        "the scene is " + std::to_string(scene->dimension) + "D but the mesh " + args.mesh + " is " +
                            std::to_string(loaded.dimension) + "D");
+  } else if (!args.phase_map.empty()) {
+    throw InputError("--phase-map", "", "needs --scene (the phases are mapped to the scene's)");
   }
+  std::string match_note;
+  if (scene) match_note = match_scene_phases(args, loaded, *scene);
   const geometry::SceneDesc* scene_or_none = scene ? &*scene : nullptr;
-  return loaded.dimension == 2 ? certify_mesh<2>(loaded.mesh2, scene_or_none, options, flags, times)
-                               : certify_mesh<3>(loaded.mesh3, scene_or_none, options, flags, times);
+  quality::Certificate c = loaded.dimension == 2 ? certify_mesh<2>(loaded.mesh2, scene_or_none, options, flags, times)
+                                                 : certify_mesh<3>(loaded.mesh3, scene_or_none, options, flags, times);
+  if (!match_note.empty()) c.notes.push_back(match_note);
+  return c;
 }
 
 }  // namespace
@@ -78,9 +112,15 @@ void add_certify_command(CLI::App& app, GlobalFlags& flags, int& exit_code) {
   auto args = std::make_shared<CertifyArgs>();
   CLI::App* cmd = app.add_subcommand(
       "certify", "Check a mesh (aspect ratio, conformity, phase fidelity) and write its certificate");
-  cmd->add_option("mesh", args->mesh, "Mesh file: .vtu, .msh, .inp or .mesh")->required();
+  cmd->add_option("mesh", args->mesh,
+                  "Mesh file: .vtu (plain or zlib-compressed), .pvtu, .vtk (legacy), .msh (Gmsh 4.1/2.2, ASCII or "
+                  "binary), .inp (Abaqus), .mesh (Medit), .node/.ele (TetGen)")
+      ->required();
   cmd->add_option("--scene", args->scene,
                   "Scene the mesh was made from: domain box, expected measure and phase fidelity");
+  cmd->add_option("--phase-map", args->phase_map,
+                  "With --scene: mesh phases to scene phases, MESH=SCENE,... (ids or names; default: by the names "
+                  "the file gives, else by id)");
   cmd->add_option("--html", args->html, "Write the certificate as a self-contained HTML page");
   cmd->add_option("--json", args->json, "Write the certificate as JSON");
   const CLI::Validator at_least_one(

@@ -19,6 +19,7 @@
 // Numbers in ASCII formats are printed with the shortest text that reads back to the same
 // double, so every format round-trips coordinates bit for bit.
 #include <cstdint>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -73,16 +74,27 @@ struct LoadedMesh {
   mesh::Mesh2 mesh2;
   mesh::Mesh3 mesh3;
   std::vector<geometry::Phase> phases;  // every phase id used by a cell, ascending
+  // The names the file itself gives (physical names, ELSETs, VTU field data phase_names,
+  // Medit "# phase ID NAME" comments, meshio's field data), by id: `phases` names the
+  // others "phase<id>". certify matches phases to the scene's by these names.
+  std::map<int, std::string> phase_names_in_file;
 };
 
-// Reads .vtu (appended raw or base64, inline base64 or ascii DataArrays; UInt32 or UInt64
-// headers; no compression), .msh (Gmsh 4.1 and 2.2 ASCII), .mesh (Medit ASCII) and .inp
-// (Abaqus, as written above). Triangles or tetrahedra only: points and lines (and boundary
-// triangles of a tetrahedral mesh) are skipped, any other element type is an InputError.
-// The mesh is 2D when its cells are triangles and every z is 0. Phases come from the
-// phase array / physical tags / references / ELSETs (1 when absent), names from physical
-// names or ELSET names ("phase<id>" otherwise); absent global ids are the node index,
-// absent partitions 0.
+// Reads what cisamr and other tools write (lib/io/README.md, "Reading meshes"):
+//   .vtu   ascii, inline base64, appended raw or base64; UInt32 or UInt64 headers; plain or
+//          zlib-compressed (vtkZLibDataCompressor); one piece
+//   .pvtu  its .vtu pieces, nodes merged by global_id (or else by exact coordinates)
+//   .vtk   legacy, ASCII or BINARY, UNSTRUCTURED_GRID (versions 2 to 5.1)
+//   .msh   Gmsh 4.1 and 2.2, ASCII and binary
+//   .mesh  Medit ASCII;  .inp  Abaqus (several element blocks, *ELSET);
+//   .node/.ele  TetGen (or Triangle): the two files of the named stem
+// Triangles or tetrahedra only: points and lines (and boundary triangles of a tetrahedral
+// mesh) are skipped, any other element type is an InputError. The mesh is 2D when its
+// cells are triangles and every z is 0. Phases come from the phase array (or gmsh:physical,
+// medit:ref) / physical tags / references / ELSETs / region attributes (1 when absent);
+// absent global ids are the node index, absent partitions 0. Every problem is an
+// InputError naming the file, never a crash; counts are checked against the file's size
+// before anything is reserved.
 LoadedMesh read_mesh(const std::string& path);
 
 }  // namespace cisamr::io

@@ -23,7 +23,8 @@ done
 shift $((OPTIND - 1))
 targets=("$@")
 if [ ${#targets[@]} -eq 0 ]; then
-  targets=(fuzz_scene fuzz_pack_spec fuzz_stl fuzz_mesh_vtu fuzz_mesh_msh fuzz_mesh_inp fuzz_mesh_medit)
+  targets=(fuzz_scene fuzz_pack_spec fuzz_stl fuzz_mesh_vtu fuzz_mesh_msh fuzz_mesh_inp fuzz_mesh_medit
+           fuzz_mesh_vtk fuzz_mesh_pvtu fuzz_mesh_tetgen)
 fi
 
 cxx=${CXX:-$(command -v clang++-14 || command -v clang++)}

@@ -1,0 +1,232 @@
+// Abaqus INP reader.
+
+#include "core/error.hpp"
+#include "io/mesh_read_internal.hpp"
+
+namespace cisamr::io::detail {
+namespace {
+
+void split_commas(std::string_view line, std::vector<std::string_view>& fields) {
+  fields.clear();
+  std::size_t start = 0;
+  while (true) {
+    const std::size_t comma = line.find(',', start);
+    fields.push_back(trim(line.substr(start, comma == std::string_view::npos ? std::string_view::npos : comma - start)));
+    if (comma == std::string_view::npos) break;
+    start = comma + 1;
+  }
+  if (!fields.empty() && fields.back().empty()) fields.pop_back();  // trailing comma
+}
+
+// Element sets: the phases of an Abaqus mesh. A set is named by an *ELEMENT block's ELSET=
+// or by an *ELSET block (ids, GENERATE ranges, names of earlier sets).
+struct ElementSets {
+  std::vector<std::string> names;          // in order of appearance
+  std::map<std::string, int> index;        // upper-case name → index
+  std::unordered_map<long long, int> first_listing;  // element id → first *ELSET listing it
+  struct Range { int set; long long first, last, step; };
+  std::vector<Range> ranges;                // GENERATE lines
+  std::map<int, std::pair<int, std::string>> announced;  // set → (id, name) from "** cisamr phase"
+
+  int add(const std::string& name) {
+    const auto [it, inserted] = index.emplace(upper(name), static_cast<int>(names.size()));
+    if (inserted) names.push_back(name);
+    return it->second;
+  }
+  // The first *ELSET listing `element` (by id or by a range), or -1. A set named in an
+  // *ELSET's data comes earlier in the file, so it never decides over its own listing.
+  int listing(long long element) const {
+    const auto it = first_listing.find(element);
+    int best = it == first_listing.end() ? -1 : it->second;
+    for (const Range& r : ranges)
+      if ((best < 0 || r.set < best) && element >= r.first && element <= r.last &&
+          (static_cast<unsigned long long>(element) - static_cast<unsigned long long>(r.first)) %
+                  static_cast<unsigned long long>(r.step) ==
+              0)
+        best = r.set;
+    return best;
+  }
+};
+
+}  // namespace
+
+// An element's phase is the ELSET= of its *ELEMENT block, or when that has none, the first
+// *ELSET block (in file order) that lists it; sets get ids in order of appearance unless our writer's
+// "** cisamr phase ID NAME" comment gives one. *NSET, *SURFACE, materials, steps etc. are
+// ignored; *INCLUDE is refused (the included file would hold part of the mesh).
+LoadedMesh read_inp(const std::string& path) {
+  const MappedFile file(path);
+  const std::string_view text = file.view();
+  RawMesh raw;
+  TaggedCells cells;
+  std::vector<long long> node_tags;
+  std::vector<int> cell_block_set;  // per cell (file order of triangles, then tetrahedra): -1 none
+  ElementSets sets;
+  std::optional<std::pair<int, std::string>> announced;  // from "** cisamr phase ID NAME"
+  enum class Block { none, nodes, triangles, tetrahedra, elset } block = Block::none;
+  int block_set = -1;
+  bool generate = false;
+  std::size_t line_number = 0, pos = 0;
+  std::vector<std::string_view> fields;  // reused: one allocation for the whole file
+
+  auto fail = [&](const std::string& problem) -> void {
+    throw InputError(path, "line " + std::to_string(line_number), problem);
+  };
+  auto parse_int = [&](std::string_view field) {
+    long long v = 0;
+    const auto r = std::from_chars(field.data(), field.data() + field.size(), v);
+    if (r.ec != std::errc() || r.ptr != field.data() + field.size())
+      fail("expected an integer, got '" + std::string(field.substr(0, 40)) + "'");
+    return v;
+  };
+  auto parse_real = [&](std::string_view field) {
+    double v = 0;
+    const char* begin = field.data() + (!field.empty() && field[0] == '+' ? 1 : 0);
+    const auto r = std::from_chars(begin, field.data() + field.size(), v);
+    if (r.ec != std::errc() || r.ptr != field.data() + field.size())
+      fail("expected a number, got '" + std::string(field.substr(0, 40)) + "'");
+    return v;
+  };
+
+  // Plane and axisymmetric triangles, and the surface triangles other tools use for a
+  // plain triangle mesh (meshio writes R3D3); a non-flat one is rejected by finish().
+  static const char* const kTriangleTypes[] = {"CPS3", "CPE3", "CPE3H", "CAX3", "CAX3H", "DC2D3", "CPS3T",
+                                               "CPE3T", "S3", "S3R", "R3D3", "M3D3", "STRI3", "DS3"};
+  static const char* const kTetTypes[] = {"C3D4", "C3D4H", "C3D4T", "DC3D4"};
+
+  while (pos < text.size()) {
+    const std::size_t end = std::min(text.find('\n', pos), text.size());
+    std::string_view line = trim(std::string_view(text).substr(pos, end - pos));
+    pos = end + 1;
+    ++line_number;
+    if (line.empty()) continue;
+    if (line.substr(0, 2) == "**") {
+      constexpr std::string_view kMarker = "** cisamr phase ";
+      if (line.substr(0, kMarker.size()) == kMarker) {
+        std::string_view rest = line.substr(kMarker.size());
+        const std::size_t space = rest.find(' ');
+        const long long id = parse_int(rest.substr(0, space));
+        if (id < std::numeric_limits<std::int32_t>::min() || id > std::numeric_limits<std::int32_t>::max())
+          fail("phase id " + std::to_string(id) + " is out of range");
+        announced = std::make_pair(static_cast<int>(id), space == std::string_view::npos
+                                                              ? "phase" + std::to_string(id)
+                                                              : std::string(trim(rest.substr(space + 1))));
+      }
+      continue;
+    }
+    if (line[0] == '*') {
+      split_commas(line.substr(1), fields);
+      const std::string keyword = upper(fields.empty() ? std::string_view() : fields[0]);
+      std::map<std::string, std::string> params;
+      for (std::size_t i = 1; i < fields.size(); ++i) {
+        const std::size_t eq = fields[i].find('=');
+        params[upper(trim(fields[i].substr(0, eq)))] =
+            eq == std::string_view::npos ? "" : std::string(trim(fields[i].substr(eq + 1)));
+      }
+      block = Block::none;
+      if (keyword == "INCLUDE") {
+        fail("*INCLUDE is not followed: merge the included file into this one");
+      } else if (keyword == "NODE") {
+        block = Block::nodes;
+      } else if (keyword == "ELEMENT") {
+        const std::string type = upper(params["TYPE"]);
+        if (std::find(std::begin(kTriangleTypes), std::end(kTriangleTypes), type) != std::end(kTriangleTypes))
+          block = Block::triangles;
+        else if (std::find(std::begin(kTetTypes), std::end(kTetTypes), type) != std::end(kTetTypes))
+          block = Block::tetrahedra;
+        else
+          fail("unsupported element type '" + params["TYPE"] + "': only triangles and tetrahedra are read");
+        const std::string elset = params["ELSET"];
+        block_set = elset.empty() ? -1 : sets.add(elset);
+        if (announced && block_set >= 0) sets.announced.emplace(block_set, *announced);
+        announced.reset();
+      } else if (keyword == "ELSET") {
+        const std::string elset = params["ELSET"];
+        if (elset.empty()) fail("*ELSET without ELSET=");
+        block = Block::elset;
+        block_set = sets.add(elset);
+        generate = params.count("GENERATE") > 0;
+      }
+      continue;
+    }
+    if (block == Block::none) continue;  // data of a keyword we do not read
+    split_commas(line, fields);
+    if (block == Block::nodes) {
+      if (fields.size() != 3 && fields.size() != 4) fail("a node line needs an id and 2 or 3 coordinates");
+      node_tags.push_back(parse_int(fields[0]));
+      for (std::size_t d = 1; d < 4; ++d) raw.coords.push_back(d < fields.size() ? parse_real(fields[d]) : 0.0);
+    } else if (block == Block::elset) {
+      if (generate) {
+        if (fields.size() != 2 && fields.size() != 3) fail("a GENERATE line needs first, last[, step]");
+        const long long first = parse_int(fields[0]), last = parse_int(fields[1]);
+        const long long step = fields.size() == 3 ? parse_int(fields[2]) : 1;
+        if (step <= 0 || last < first) fail("a GENERATE line needs first <= last and a positive step");
+        sets.ranges.push_back({block_set, first, last, step});
+      } else {
+        for (const std::string_view field : fields) {
+          if (field.empty()) continue;
+          long long id = 0;
+          const auto r = std::from_chars(field.data(), field.data() + field.size(), id);
+          if (r.ec == std::errc() && r.ptr == field.data() + field.size()) {
+            sets.first_listing.emplace(id, block_set);
+          } else {
+            const auto named = sets.index.find(upper(field));
+            if (named == sets.index.end() || named->second == block_set)
+              fail("*ELSET " + sets.names[static_cast<std::size_t>(block_set)] + " lists '" +
+                   std::string(field.substr(0, 40)) + "', neither an element id nor an earlier set");
+          }
+        }
+      }
+    } else {
+      const std::size_t n = block == Block::triangles ? 3 : 4;
+      if (fields.size() != n + 1)
+        fail("an element line needs an id and " + std::to_string(n) + " nodes");
+      std::array<long long, 4> nodes{};
+      for (std::size_t k = 0; k < n; ++k) nodes[k] = parse_int(fields[k + 1]);
+      // The phase is decided once every set is known: the block's set for now.
+      (block == Block::triangles ? cells.triangles : cells.tetrahedra).push_back({parse_int(fields[0]), block_set, nodes});
+    }
+  }
+
+  // Phases: each cell's deciding set, then ids for the sets that decide any cell.
+  std::vector<int> set_id(sets.names.size(), 0);
+  std::vector<bool> used(sets.names.size(), false);
+  std::vector<TaggedCells::Cell>& kept = cells.tetrahedra.empty() ? cells.triangles : cells.tetrahedra;
+  // Each cell without a block set is tested against every GENERATE range: bounded.
+  if (!sets.ranges.empty() && kept.size() > 2'000'000'000 / sets.ranges.size())
+    throw InputError(path, "*ELSET", std::to_string(sets.ranges.size()) + " GENERATE ranges for " +
+                                         std::to_string(kept.size()) + " elements are too many to resolve");
+  bool unset = false;
+  for (TaggedCells::Cell& c : kept) {
+    if (c.phase < 0) c.phase = sets.listing(c.tag);
+    if (c.phase >= 0) used[static_cast<std::size_t>(c.phase)] = true;
+    else unset = true;
+  }
+  std::map<int, bool> id_taken;  // ids given by comments first, then the next free ones
+  for (const auto& [set, announced_id] : sets.announced)
+    if (used[static_cast<std::size_t>(set)]) id_taken[announced_id.first] = true;
+  int next_id = 1;
+  auto next_free = [&] {
+    while (id_taken.count(next_id)) ++next_id;
+    id_taken[next_id] = true;
+    return next_id;
+  };
+  for (std::size_t k = 0; k < sets.names.size(); ++k) {
+    if (!used[k]) continue;
+    const auto a = sets.announced.find(static_cast<int>(k));
+    if (a != sets.announced.end()) {
+      set_id[k] = a->second.first;
+      raw.phase_names[a->second.first] = a->second.second;
+    } else {
+      set_id[k] = next_free();
+      raw.phase_names[set_id[k]] = sets.names[k];
+    }
+  }
+  const int unset_id = unset ? next_free() : 0;
+  for (TaggedCells::Cell& c : kept) c.phase = c.phase >= 0 ? set_id[static_cast<std::size_t>(c.phase)] : unset_id;
+  const TagMap map = sort_nodes_by_tag(raw, node_tags, path);
+  cells.finish(raw, map, path);
+  return finish(std::move(raw), path);
+}
+
+}  // namespace cisamr::io::detail
