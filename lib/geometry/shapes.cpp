@@ -169,6 +169,13 @@ double shape_boundary_measure(const Shape& s) {
   return nurbs::length(region_of(std::get<NurbsCurve>(s)));
 }
 
+void shape_boundary_samples_within(const Shape& s, double spacing, const Box3& clip, std::vector<Vec3>& points,
+                                   std::vector<double>& areas) {
+  if (!(spacing > 0)) throw std::invalid_argument("shape_boundary_samples_within: spacing must be positive");
+  if (shape_dimension(s) != 3) throw std::invalid_argument("shape_boundary_samples_within: a 2D shape");
+  detail::boundary_samples_within3(s, spacing, clip, points, areas);
+}
+
 std::vector<Vec3> shape_boundary_samples(const Shape& s, double spacing) {
   if (!(spacing > 0)) throw std::invalid_argument("shape_boundary_samples: spacing must be positive");
   if (shape_dimension(s) == 3) return detail::boundary_samples3(s, spacing);

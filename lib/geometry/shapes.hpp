@@ -24,6 +24,14 @@ double shape_boundary_measure(const Shape& s);
 // order; 3D: a roughly uniform point cloud). For load measures and drawings.
 std::vector<Vec3> shape_boundary_samples(const Shape& s, double spacing);
 
+// The boundary samples of a 3D shape that lie in `clip`, with the area each stands for
+// (their sum approximates the area of the boundary inside `clip`). Spheres and ellipsoids
+// halve their parametrisation and skip the pieces that miss `clip`, so the cost follows
+// the part inside, not the whole surface; other families filter
+// shape_boundary_samples, each sample an equal share of the boundary measure.
+void shape_boundary_samples_within(const Shape& s, double spacing, const Box3& clip, std::vector<Vec3>& points,
+                                   std::vector<double>& areas);
+
 // Is a point inside the closed region (z ignored in 2D)?
 bool shape_contains(const Shape& s, const Vec3& p);
 

@@ -204,6 +204,90 @@ std::vector<Vec3> boundary_samples3(const Shape& s, double spacing) {
   return out;
 }
 
+namespace {
+
+// Midpoint-rule samples of the quadric surface centre + frame·(a sinθ cosφ, b sinθ sinφ,
+// c cosθ) over the parameter rectangle [t0, t1] × [f0, f1], recursively halved; a piece
+// whose points all lie farther than its reach from `clip` is skipped.
+struct QuadricPatches {
+  Vec3 center, semi;
+  Rotation3 frame;  // columns: the body axes in the world
+  double reach_scale, spacing;
+  const Box3& clip;
+  std::vector<Vec3>& points;
+  std::vector<double>& areas;
+
+  Vec3 at(double t, double f, Vec3* dt, Vec3* df) const {
+    const Vec3 body{semi[0] * std::sin(t) * std::cos(f), semi[1] * std::sin(t) * std::sin(f), semi[2] * std::cos(t)};
+    const Vec3 body_t{semi[0] * std::cos(t) * std::cos(f), semi[1] * std::cos(t) * std::sin(f), -semi[2] * std::sin(t)};
+    const Vec3 body_f{-semi[0] * std::sin(t) * std::sin(f), semi[1] * std::sin(t) * std::cos(f), 0};
+    Vec3 p = center;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) {
+        p[i] += frame[i][j] * body[j];
+        (*dt)[i] += frame[i][j] * body_t[j];
+        (*df)[i] += frame[i][j] * body_f[j];
+      }
+    return p;
+  }
+
+  void visit(double t0, double t1, double f0, double f1, int depth) {
+    const double tm = 0.5 * (t0 + t1), fm = 0.5 * (f0 + f1);
+    Vec3 dt{}, df{};
+    const Vec3 p = at(tm, fm, &dt, &df);
+    // Every point of the piece is within `reach` of p (arc lengths along both parameters).
+    const double reach = reach_scale * ((t1 - t0) + (f1 - f0));
+    for (int d = 0; d < 3; ++d)
+      if (!(p[d] + reach >= clip.min[d] && p[d] - reach <= clip.max[d])) return;
+    if (reach <= 2 * spacing || depth >= kMaxDepth) {
+      if (point_in(p)) {
+        points.push_back(p);
+        areas.push_back(norm(cross(dt, df)) * (t1 - t0) * (f1 - f0));
+      }
+      return;
+    }
+    visit(t0, tm, f0, fm, depth + 1);
+    visit(t0, tm, fm, f1, depth + 1);
+    visit(tm, t1, f0, fm, depth + 1);
+    visit(tm, t1, fm, f1, depth + 1);
+  }
+
+  bool point_in(const Vec3& p) const {
+    for (int d = 0; d < 3; ++d)
+      if (!(p[d] >= clip.min[d] && p[d] <= clip.max[d])) return false;
+    return true;
+  }
+
+  static constexpr int kMaxDepth = 52;  // parameter steps near the double resolution of π
+};
+
+}  // namespace
+
+void boundary_samples_within3(const Shape& s, double spacing, const Box3& clip, std::vector<Vec3>& points,
+                              std::vector<double>& areas) {
+  points.clear();
+  areas.clear();
+  const auto quadric = [&](const Vec3& center, const Vec3& semi, const Rotation3& frame) {
+    const double amax = std::max({semi[0], semi[1], semi[2]});
+    QuadricPatches{center, semi, frame, amax, spacing, clip, points, areas}.visit(0, M_PI, 0, 2 * M_PI, 0);
+  };
+  if (const auto* sp = std::get_if<Sphere>(&s)) {
+    quadric(sp->center, {sp->radius, sp->radius, sp->radius}, Rotation3{{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}});
+    return;
+  }
+  if (const auto* e = std::get_if<Ellipsoid>(&s)) {
+    quadric(e->center, e->semi_axes, e->rotation);
+    return;
+  }
+  // Other families: their evenly spread samples, each standing for an equal share.
+  const std::vector<Vec3> all = boundary_samples3(s, spacing);
+  const double share = all.empty() ? 0 : boundary_measure3(s) / static_cast<double>(all.size());
+  for (const Vec3& p : all)
+    if (p[0] >= clip.min[0] && p[0] <= clip.max[0] && p[1] >= clip.min[1] && p[1] <= clip.max[1] &&
+        p[2] >= clip.min[2] && p[2] <= clip.max[2])
+      points.push_back(p), areas.push_back(share);
+}
+
 bool contains3(const Shape& s, const Vec3& p) {
   if (const auto* sp = std::get_if<Sphere>(&s)) {
     const Vec3 d{p[0] - sp->center[0], p[1] - sp->center[1], p[2] - sp->center[2]};

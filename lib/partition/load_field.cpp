@@ -20,6 +20,8 @@ class Accumulator {
   explicit Accumulator(LoadField& f) : f_(f) {}
 
   // Adds `value` at point x (wrapped when periodic, dropped outside the domain otherwise).
+  const LoadField& field() const { return f_; }
+
   void add_point(Vec3 x, double value) {
     const std::int64_t c = cell_of(x);
     if (c >= 0) f_.cells[static_cast<std::size_t>(c)] += value;
@@ -94,6 +96,12 @@ class Accumulator {
  private:
   LoadField& f_;
 };
+
+bool box_within(const Box3& inner, const Box3& outer) {
+  for (int d = 0; d < 3; ++d)
+    if (!(inner.min[d] >= outer.min[d] && inner.max[d] <= outer.max[d])) return false;
+  return true;
+}
 
 // Cylinders keep their own midpoint quadrature (rings at the middle of equal slices, caps in
 // rings of equal area): geometry's cylinder samples lie on rings at t = i/n, which for fibres
@@ -207,6 +215,16 @@ void add_inclusion(Accumulator& acc, const Inclusion& inc, double weight, double
       length += std::hypot(pts[(i + 1) % n][0] - pts[i][0], pts[(i + 1) % n][1] - pts[i][1]);
     }
     return acc.add_polyline(poly, weight, spacing, shape_boundary_measure(inc.shape) / length);
+  }
+  // Only what lies in a bounded domain counts: a surface that reaches out of it is
+  // sampled there only, so that its cost follows the part inside.
+  const LoadField& f = acc.field();
+  if (!f.periodic && !box_within(shape_bounding_box(inc.shape), f.domain)) {
+    std::vector<Vec3> pts;
+    std::vector<double> area;
+    shape_boundary_samples_within(inc.shape, spacing, f.domain, pts, area);
+    for (std::size_t i = 0; i < pts.size(); ++i) acc.add_point(pts[i], weight * area[i]);
+    return;
   }
   const auto pts = shape_boundary_samples(inc.shape, spacing);
   if (pts.empty()) return;
