@@ -26,6 +26,8 @@ class ShapeFamily {
 
   // The operations of shapes.hpp on a descriptor of this family (see there).
   virtual Box3 bounding_box(const Shape& s) const = 0;
+  // shape_holding_box: a box that holds the shape, cheap to compute. Default: the tight one.
+  virtual Box3 holding_box(const Shape& s) const { return bounding_box(s); }
   virtual double measure(const Shape& s) const = 0;
   virtual double boundary_measure(const Shape& s) const = 0;
   virtual std::vector<Vec3> boundary_samples(const Shape& s, double spacing) const = 0;

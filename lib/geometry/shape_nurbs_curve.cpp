@@ -88,6 +88,12 @@ class NurbsCurveFamily final : public FamilyOf<NurbsCurve> {
     const nurbs::Region r = region_of(of(s));
     return detail::points_box(nurbs::flatten(r, 1e-12 * r.size));
   }
+  Box3 holding_box(const Shape& s) const override {
+    Box3 b{{INFINITY, INFINITY, 0}, {-INFINITY, -INFINITY, 0}};
+    for (const Vec2& p : of(s).control_points)
+      for (int d = 0; d < 2; ++d) b.min[d] = std::min(b.min[d], p[d]), b.max[d] = std::max(b.max[d], p[d]);
+    return b;
+  }
   double measure(const Shape& s) const override { return nurbs::area(region_of(of(s))); }
   double boundary_measure(const Shape& s) const override { return nurbs::length(region_of(of(s))); }
   std::vector<Vec3> boundary_samples(const Shape& s, double spacing) const override {

@@ -2,6 +2,8 @@
 // is not implemented yet (std::logic_error), and the oracle refuses the shape.
 #include "geometry/shape_nurbs_surface.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <stdexcept>
 
 #include "core/error.hpp"
@@ -17,6 +19,13 @@ class NurbsSurfaceFamily final : public FamilyOf<NurbsSurface> {
   std::string_view name() const override { return "nurbs_surface"; }
   int dimension() const override { return 3; }
   Box3 bounding_box(const Shape&) const override { not_implemented(); }
+  Box3 holding_box(const Shape& s) const override {
+    Box3 b{{INFINITY, INFINITY, INFINITY}, {-INFINITY, -INFINITY, -INFINITY}};
+    for (const NurbsPatch& patch : of(s).patches)
+      for (const Vec3& p : patch.control_points)
+        for (int d = 0; d < 3; ++d) b.min[d] = std::min(b.min[d], p[d]), b.max[d] = std::max(b.max[d], p[d]);
+    return b;
+  }
   double measure(const Shape&) const override { not_implemented(); }
   double boundary_measure(const Shape&) const override { not_implemented(); }
   std::vector<Vec3> boundary_samples(const Shape&, double) const override { not_implemented(); }

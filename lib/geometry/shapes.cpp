@@ -64,6 +64,10 @@ int shape_dimension(const Shape& s) { return shape_family(s).dimension(); }
 
 Box3 shape_bounding_box(const Shape& s) { return shape_family(s).bounding_box(s); }
 
+Box3 shape_holding_box(const Shape& s) { return shape_family(s).holding_box(s); }
+
+bool shape_judged_by_box(const Shape& s) { return shape_family(s).judged_by_box(); }
+
 double shape_measure(const Shape& s) { return shape_family(s).measure(s); }
 
 double shape_boundary_measure(const Shape& s) { return shape_family(s).boundary_measure(s); }

@@ -238,27 +238,7 @@ int effective_levels(const SceneDesc& scene, const Inclusion& inc) {
   return std::max(1, inc.levels > 0 ? inc.levels : scene.levels);
 }
 
-Box3 inclusion_box(const Shape& shape) {
-  // NURBS: the box of the control points (it contains the curve or surface).
-  auto control_box = [](const auto& points, Box3& b) {
-    for (const auto& p : points)
-      for (std::size_t d = 0; d < p.size(); ++d) {
-        b.min[d] = std::min(b.min[d], p[d]);
-        b.max[d] = std::max(b.max[d], p[d]);
-      }
-  };
-  if (const auto* c = std::get_if<NurbsCurve>(&shape)) {
-    Box3 b{{INFINITY, INFINITY, 0}, {-INFINITY, -INFINITY, 0}};
-    control_box(c->control_points, b);
-    return b;
-  }
-  if (const auto* s = std::get_if<NurbsSurface>(&shape)) {
-    Box3 b{{INFINITY, INFINITY, INFINITY}, {-INFINITY, -INFINITY, -INFINITY}};
-    for (const auto& patch : s->patches) control_box(patch.control_points, b);
-    return b;
-  }
-  return shape_bounding_box(shape);
-}
+Box3 inclusion_box(const Shape& shape) { return shape_holding_box(shape); }
 
 double LoadField::box_load(const std::array<std::int64_t, 3>& lo, const std::array<std::int64_t, 3>& hi) const {
   const std::int64_t sx = n[0] + 1, sy = n[1] + 1;

@@ -21,10 +21,7 @@ template <int Dim>
 constexpr double kMaxBucketsPerAxis = Dim == 2 ? 2048 : 128;
 
 // Shapes whose distance is judged by their boxes (exact tests too slow or not available).
-bool by_box(const geometry::Shape& s) {
-  return std::holds_alternative<geometry::NurbsCurve>(s) || std::holds_alternative<geometry::StlSurface>(s) ||
-         std::holds_alternative<geometry::NurbsSurface>(s);
-}
+bool by_box(const geometry::Shape& s) { return geometry::shape_judged_by_box(s); }
 
 template <int Dim>
 double box_distance(const Box3& a, const Box3& b) {
@@ -175,21 +172,12 @@ std::vector<Box3> holding_boxes(const geometry::SceneDesc& scene, std::span<cons
   out.reserve(scene.inclusions.size());
   for (std::size_t k = 0; k < scene.inclusions.size(); ++k) {
     const geometry::Shape& shape = scene.inclusions[k].shape;
-    // geometry's tight box of a NURBS curve costs ~0.2 s per curve: too much for a scene.
-    if (const auto* c = std::get_if<geometry::NurbsCurve>(&shape); c != nullptr && !c->control_points.empty()) {
-      const Vec2& p0 = c->control_points.front();
-      Box3 b{{p0[0], p0[1], 0}, {p0[0], p0[1], 0}};
-      for (const Vec2& p : c->control_points)
-        for (int d = 0; d < 2; ++d) b.min[d] = std::min(b.min[d], p[d]), b.max[d] = std::max(b.max[d], p[d]);
-      out.push_back(b);
-      continue;
-    }
     const auto* stl = std::get_if<geometry::StlSurface>(&shape);
     if (stl != nullptr && stl->triangles.empty() && k < known.size()) {
       out.push_back(known[k]);
       continue;
     }
-    out.push_back(geometry::shape_bounding_box(shape));
+    out.push_back(geometry::shape_holding_box(shape));
   }
   return out;
 }
