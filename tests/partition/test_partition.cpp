@@ -2,6 +2,7 @@
 // better balance than a uniform grid on a clustered scene, the paper's Fig. 3 merge.
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
 #include <nlohmann/json.hpp>
 
@@ -119,6 +120,17 @@ TEST(PartitionLoad, SurfacesCountOnlyInsideTheDomain) {
   // The same through a rotated ellipsoid of equal axes.
   s.inclusions[0].shape = Ellipsoid{{0.5, 0.5, 0.5}, {r, r, r}, quaternion_rotation(0.8, 0.6, 0, 0)};
   EXPECT_NEAR(partition::total_load(s), inside, 1e-2 * inside);  // leaves cut by the faces
+}
+
+TEST(PartitionLoad, AFibreFarLongerThanTheDomainCostsItsPartInside) {
+  // Along z through the unit cube, 2e7 long: 3.2e8 slices of rings, of which ~16 meet it.
+  SceneDesc s = base_scene(3, 1, 0.25);
+  s.inclusions.push_back({Cylinder{{0.5, 0.5, -1e7}, {0.5, 0.5, 1e7}, 0.1}, 2, 1});
+  const auto start = std::chrono::steady_clock::now();
+  const double load = partition::total_load(s);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  EXPECT_NEAR(load, 2 * M_PI * 0.1, 1e-9);  // the lateral surface inside; the caps are far
+  EXPECT_LT(seconds, 5.0);
 }
 
 TEST(PartitionLoad, EllipsePerimeterIsExact) {  // the |A_k| the load field scales its samples to
