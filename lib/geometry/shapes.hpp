@@ -1,7 +1,8 @@
 #pragma once
 // Free functions on single shapes (no scene, no CGAL in this header): what packing,
 // partitioning and validation need. 2D shapes answer with areas/perimeters, 3D shapes
-// with volumes/surface areas. Implemented in shapes.cpp (2D) and shapes3.cpp (3D).
+// with volumes/surface areas. Each asks the shape's family (shape_family.hpp, one per
+// shape_<family>.cpp); shapes.cpp and shapes3.cpp combine two families for the overlaps.
 #include <vector>
 
 #include "core/types.hpp"
