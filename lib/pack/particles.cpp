@@ -294,7 +294,7 @@ Shape scaled_about_origin(const Shape& shape, double f) {
             for (auto& t : s.translate) t *= f;
             return s;
           },
-          [&](NurbsSurface s) -> Shape { return s; },
+          [&](const auto& s) -> Shape { return s; },  // families the packer does not generate
       },
       shape);
 }
