@@ -134,23 +134,53 @@ struct Oracle<Dim>::Impl {
 };
 
 // ---------------------------------------------------------------- build and validation
+namespace {
+
+// The scene-wide checks of the oracle: the matrix phase and the number of phases.
+void check_phases(const SceneDesc& scene) {
+  const int matrix = scene.phase_index(scene.matrix_phase);
+  if (matrix < 0)
+    throw InputError(scene.source, "matrix_phase", "no phase has id " + std::to_string(scene.matrix_phase));
+  if (scene.phases.size() > 64) throw InputError(scene.source, "phases", "at most 64 phases are supported");
+}
+
+// The phase index of inclusion i (checked) and its shape model (validated).
+template <int Dim>
+std::unique_ptr<DimensionModel<Dim>> checked_inclusion(const SceneDesc& scene, std::size_t i, int& phase) {
+  const Inclusion& inc = scene.inclusions[i];
+  const std::string field = inclusion_field(i);
+  phase = scene.phase_index(inc.phase);
+  if (phase < 0) throw InputError(scene.source, field + ".phase", "no phase has id " + std::to_string(inc.phase));
+  return make_shape_model<Dim>(inc.shape, scene.source, field);
+}
+
+}  // namespace
+
+template <int Dim>
+void validate_inclusions(const SceneDesc& scene) {
+  check_phases(scene);
+  for (std::size_t i = 0; i < scene.inclusions.size(); ++i) {
+    const auto* stl = std::get_if<StlSurface>(&scene.inclusions[i].shape);
+    if (stl != nullptr && stl->triangles.empty()) continue;
+    int phase = 0;
+    checked_inclusion<Dim>(scene, i, phase);
+  }
+}
+
+template void validate_inclusions<2>(const SceneDesc&);
+template void validate_inclusions<3>(const SceneDesc&);
+
 template <int Dim>
 void Oracle<Dim>::Impl::validate_and_build(const SceneDesc& s) {
   scene = s;
-  const std::string& src = scene.source;
+  check_phases(scene);
   matrix = scene.phase_index(scene.matrix_phase);
-  if (matrix < 0) throw InputError(src, "matrix_phase", "no phase has id " + std::to_string(scene.matrix_phase));
-  if (scene.phases.size() > 64) throw InputError(src, "phases", "at most 64 phases are supported");
   items.reserve(scene.inclusions.size());
   shapes.reserve(scene.inclusions.size());
   for (std::size_t i = 0; i < scene.inclusions.size(); ++i) {
-    const Inclusion& inc = scene.inclusions[i];
-    const std::string field = inclusion_field(i);
     Item it{};
-    it.phase = scene.phase_index(inc.phase);
-    if (it.phase < 0) throw InputError(src, field + ".phase", "no phase has id " + std::to_string(inc.phase));
-    it.levels = inc.levels;
-    shapes.push_back(make_shape_model<Dim>(inc.shape, src, field));
+    shapes.push_back(checked_inclusion<Dim>(scene, i, it.phase));
+    it.levels = scene.inclusions[i].levels;
     items.push_back(it);
   }
   boxes.reserve(shapes.size());

@@ -87,6 +87,15 @@ class Oracle {
   std::unique_ptr<Impl> impl_;
 };
 
+// Throws what constructing Oracle<Dim>(scene) throws for an unknown phase or an invalid
+// shape, the same message for the same first fault, and keeps nothing. For the paths
+// that never build the whole scene's oracle (partitioning, the distributed mesher), so
+// that every path refuses the same scenes alike. STL surfaces without triangles are
+// skipped: they are checked where their file is read. (Overlaps of different phases are
+// not checked here.)
+template <int Dim>
+void validate_inclusions(const SceneDesc& scene);
+
 extern template class Oracle<2>;
 extern template class Oracle<3>;
 using Oracle2 = Oracle<2>;

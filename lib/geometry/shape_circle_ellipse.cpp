@@ -6,6 +6,7 @@
 
 #include "core/error.hpp"
 #include "geometry/box_tests.hpp"
+#include "geometry/shape_model.hpp"
 #include "geometry/shapes.hpp"
 
 namespace cisamr::geometry {
@@ -274,14 +275,123 @@ class EllipseModel final : public CurveModel {
 
 }  // namespace
 
-std::unique_ptr<CurveModel> make_circle_model(const Circle& circle, const std::string& source,
-                                              const std::string& field) {
-  return std::make_unique<CircleModel>(circle, source, field);
+// ---------------------------------------------------------------- scene descriptors
+
+namespace {
+
+// Closed boundary polyline: n points at equal parameter steps.
+std::vector<Vec3> ellipse_polyline(const Ellipse& e, int n) {
+  std::vector<Vec3> out;
+  const double cs = std::cos(e.angle), sn = std::sin(e.angle);
+  for (int i = 0; i < n; ++i) {
+    const double t = 2 * M_PI * i / n;
+    const double x = e.semi_axes[0] * std::cos(t), y = e.semi_axes[1] * std::sin(t);
+    out.push_back({e.center[0] + cs * x - sn * y, e.center[1] + sn * x + cs * y, 0});
+  }
+  return out;
 }
 
-std::unique_ptr<CurveModel> make_ellipse_model(const Ellipse& ellipse, const std::string& source,
-                                               const std::string& field) {
-  return std::make_unique<EllipseModel>(ellipse, source, field);
+double ellipse_perimeter(double a, double b) {
+  // The trapezoid rule is spectrally accurate for this smooth periodic integrand.
+  const int n = 4096;
+  double s = 0;
+  for (int i = 0; i < n; ++i) {
+    const double t = 2 * M_PI * (i + 0.5) / n;
+    s += std::hypot(a * std::sin(t), b * std::cos(t));
+  }
+  return s * 2 * M_PI / n;
+}
+
+class CircleFamily final : public FamilyOf<Circle> {
+ public:
+  std::string_view name() const override { return "circle"; }
+  int dimension() const override { return 2; }
+  Box3 bounding_box(const Shape& s) const override {
+    const Circle& c = of(s);
+    return {{c.center[0] - c.radius, c.center[1] - c.radius, 0}, {c.center[0] + c.radius, c.center[1] + c.radius, 0}};
+  }
+  double measure(const Shape& s) const override { return M_PI * of(s).radius * of(s).radius; }
+  double boundary_measure(const Shape& s) const override { return 2 * M_PI * of(s).radius; }
+  std::vector<Vec3> boundary_samples(const Shape& s, double spacing) const override {
+    const Circle& c = of(s);
+    std::vector<Vec3> out;
+    const int n = std::max(8, static_cast<int>(std::ceil(2 * M_PI * c.radius / spacing)));
+    for (int i = 0; i < n; ++i)
+      out.push_back({c.center[0] + c.radius * std::cos(2 * M_PI * i / n), c.center[1] + c.radius * std::sin(2 * M_PI * i / n), 0});
+    return out;
+  }
+  bool contains(const Shape& s, const Vec3& p) const override {
+    return exact::circle_side({p[0], p[1]}, of(s).center, of(s).radius) >= 0;
+  }
+  void translate(Shape& s, const Vec3& o) const override { of(s).center[0] += o[0], of(s).center[1] += o[1]; }
+  bool convex(const Shape&) const override { return true; }
+  double support(const Shape& s, const Vec3& d) const override {
+    const Circle& c = of(s);
+    return c.center[0] * d[0] + c.center[1] * d[1] + c.radius * std::hypot(d[0], d[1]);
+  }
+  std::optional<bool> overlap_same_family(const Shape& a, const Shape& b, double gap) const override {
+    const Circle &ca = of(a), &cb = of(b);
+    if (gap == 0) return exact::disks_side(ca.center, ca.radius, cb.center, cb.radius) >= 0;
+    return std::hypot(ca.center[0] - cb.center[0], ca.center[1] - cb.center[1]) <= ca.radius + cb.radius + gap;
+  }
+  std::unique_ptr<CurveModel> curve_model(const Shape& s, const std::string& source,
+                                          const std::string& field) const override {
+    return std::make_unique<CircleModel>(of(s), source, field);
+  }
+};
+
+class EllipseFamily final : public FamilyOf<Ellipse> {
+ public:
+  std::string_view name() const override { return "ellipse"; }
+  int dimension() const override { return 2; }
+  Box3 bounding_box(const Shape& s) const override {
+    const Ellipse& e = of(s);
+    const double cs = std::cos(e.angle), sn = std::sin(e.angle);
+    const double hx = std::hypot(e.semi_axes[0] * cs, e.semi_axes[1] * sn);
+    const double hy = std::hypot(e.semi_axes[0] * sn, e.semi_axes[1] * cs);
+    return {{e.center[0] - hx, e.center[1] - hy, 0}, {e.center[0] + hx, e.center[1] + hy, 0}};
+  }
+  double measure(const Shape& s) const override { return M_PI * of(s).semi_axes[0] * of(s).semi_axes[1]; }
+  double boundary_measure(const Shape& s) const override {
+    return ellipse_perimeter(of(s).semi_axes[0], of(s).semi_axes[1]);
+  }
+  std::vector<Vec3> boundary_samples(const Shape& s, double spacing) const override {
+    // Parameter steps bounded by spacing / max axis keep chords below spacing.
+    const Ellipse& e = of(s);
+    const double amax = std::max(e.semi_axes[0], e.semi_axes[1]);
+    return ellipse_polyline(e, std::max(8, static_cast<int>(std::ceil(2 * M_PI * amax / spacing))));
+  }
+  bool contains(const Shape& s, const Vec3& q) const override {
+    const Ellipse& e = of(s);
+    const double cs = std::cos(e.angle), sn = std::sin(e.angle);
+    const double dx = q[0] - e.center[0], dy = q[1] - e.center[1];
+    const double u = (dx * cs + dy * sn) / e.semi_axes[0], v = (-dx * sn + dy * cs) / e.semi_axes[1];
+    return u * u + v * v <= 1 + 1e-14;
+  }
+  void translate(Shape& s, const Vec3& o) const override { of(s).center[0] += o[0], of(s).center[1] += o[1]; }
+  bool convex(const Shape&) const override { return true; }
+  double support(const Shape& s, const Vec3& d) const override {
+    const Ellipse& e = of(s);
+    const double cs = std::cos(e.angle), sn = std::sin(e.angle);
+    const double d1 = d[0] * cs + d[1] * sn, d2 = -d[0] * sn + d[1] * cs;
+    return e.center[0] * d[0] + e.center[1] * d[1] + std::hypot(e.semi_axes[0] * d1, e.semi_axes[1] * d2);
+  }
+  std::unique_ptr<CurveModel> curve_model(const Shape& s, const std::string& source,
+                                          const std::string& field) const override {
+    return std::make_unique<EllipseModel>(of(s), source, field);
+  }
+};
+
+}  // namespace
+
+const ShapeFamily& circle_family() {
+  static const CircleFamily family;
+  return family;
+}
+
+const ShapeFamily& ellipse_family() {
+  static const EllipseFamily family;
+  return family;
 }
 
 }  // namespace cisamr::geometry

@@ -1,12 +1,10 @@
 #pragma once
 // Circles (exact) and ellipses (tolerant: the unit circle in a rotated, scaled frame).
-#include "geometry/shape_model.hpp"
+#include "geometry/shape_family.hpp"
 
 namespace cisamr::geometry {
 
-std::unique_ptr<CurveModel> make_circle_model(const Circle& circle, const std::string& source,
-                                              const std::string& field);
-std::unique_ptr<CurveModel> make_ellipse_model(const Ellipse& ellipse, const std::string& source,
-                                               const std::string& field);
+const ShapeFamily& circle_family();
+const ShapeFamily& ellipse_family();
 
 }  // namespace cisamr::geometry

@@ -6,6 +6,7 @@
 
 #include "core/error.hpp"
 #include "geometry/predicates3.hpp"
+#include "geometry/shape_model.hpp"
 
 namespace cisamr::geometry {
 
@@ -156,9 +157,94 @@ class CylinderModel final : public SurfaceModel {
 
 }  // namespace
 
-std::unique_ptr<SurfaceModel> make_cylinder_model(const Shape& shape, const std::string& source,
-                                                  const std::string& field) {
-  return std::make_unique<CylinderModel>(shape, source, field);
+// ---------------------------------------------------------------- scene descriptors
+
+namespace {
+
+class CylinderFamily final : public FamilyOf<Cylinder> {
+ public:
+  std::string_view name() const override { return "cylinder"; }
+  int dimension() const override { return 3; }
+  Box3 bounding_box(const Shape& s) const override {
+    Box3 b{};
+    for (int i = 0; i < 3; ++i) {
+      Vec3 d{0, 0, 0};
+      d[i] = 1;
+      b.max[i] = support(s, d);
+      d[i] = -1;
+      b.min[i] = -support(s, d);
+    }
+    return b;
+  }
+  double measure(const Shape& s) const override {
+    const Cylinder& c = of(s);
+    const Vec3 ax{c.end[0] - c.start[0], c.end[1] - c.start[1], c.end[2] - c.start[2]};
+    return M_PI * c.radius * c.radius * norm(ax);
+  }
+  double boundary_measure(const Shape& s) const override {
+    const Cylinder& c = of(s);
+    const Vec3 ax{c.end[0] - c.start[0], c.end[1] - c.start[1], c.end[2] - c.start[2]};
+    return 2 * M_PI * c.radius * norm(ax) + 2 * M_PI * c.radius * c.radius;
+  }
+  std::vector<Vec3> boundary_samples(const Shape& s, double spacing) const override {
+    const Cylinder& c = of(s);
+    std::vector<Vec3> out;
+    const Vec3 ax{c.end[0] - c.start[0], c.end[1] - c.start[1], c.end[2] - c.start[2]};
+    const double l = norm(ax);
+    const Vec3 u{ax[0] / l, ax[1] / l, ax[2] / l};
+    // Two unit vectors orthogonal to the axis.
+    Vec3 v = std::abs(u[0]) < 0.9 ? Vec3{0, -u[2], u[1]} : Vec3{-u[2], 0, u[0]};
+    const double nv = norm(v);
+    v = {v[0] / nv, v[1] / nv, v[2] / nv};
+    const Vec3 w{u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+    const int nring = std::max(8, static_cast<int>(std::ceil(2 * M_PI * c.radius / spacing)));
+    const int nlen = std::max(1, static_cast<int>(std::ceil(l / spacing)));
+    auto at = [&](double t, double rad, double ang) {
+      Vec3 p{};
+      for (int k = 0; k < 3; ++k) p[k] = c.start[k] + t * ax[k] + rad * (std::cos(ang) * v[k] + std::sin(ang) * w[k]);
+      return p;
+    };
+    for (int i = 0; i <= nlen; ++i)
+      for (int j = 0; j < nring; ++j) out.push_back(at(double(i) / nlen, c.radius, 2 * M_PI * j / nring));
+    const int nrad = std::max(1, static_cast<int>(std::ceil(c.radius / spacing)));
+    for (int cap = 0; cap < 2; ++cap)
+      for (int i = 0; i < nrad; ++i) {
+        const double rad = c.radius * i / nrad;
+        const int n = std::max(1, static_cast<int>(std::ceil(2 * M_PI * rad / spacing)));
+        for (int j = 0; j < n; ++j) out.push_back(at(cap, rad, 2 * M_PI * j / n));
+      }
+    return out;
+  }
+  bool contains(const Shape& s, const Vec3& p) const override {
+    const Cylinder& c = of(s);
+    const Vec3 ax{c.end[0] - c.start[0], c.end[1] - c.start[1], c.end[2] - c.start[2]};
+    const Vec3 d{p[0] - c.start[0], p[1] - c.start[1], p[2] - c.start[2]};
+    const double ll = dot(ax, ax), t = dot(d, ax);
+    if (t < 0 || t > ll) return false;
+    return dot(d, d) - t * t / ll <= c.radius * c.radius;
+  }
+  void translate(Shape& s, const Vec3& o) const override {
+    for (int k = 0; k < 3; ++k) of(s).start[k] += o[k], of(s).end[k] += o[k];
+  }
+  bool convex(const Shape&) const override { return true; }
+  double support(const Shape& s, const Vec3& d) const override {
+    const Cylinder& c = of(s);
+    const Vec3 ax{c.end[0] - c.start[0], c.end[1] - c.start[1], c.end[2] - c.start[2]};
+    const double l = norm(ax);
+    const double du = dot(d, ax) / l;
+    return std::max(dot(c.start, d), dot(c.end, d)) + c.radius * std::sqrt(std::max(0.0, dot(d, d) - du * du));
+  }
+  std::unique_ptr<SurfaceModel> surface_model(const Shape& s, const std::string& source,
+                                              const std::string& field) const override {
+    return std::make_unique<CylinderModel>(s, source, field);
+  }
+};
+
+}  // namespace
+
+const ShapeFamily& cylinder_family() {
+  static const CylinderFamily family;
+  return family;
 }
 
 }  // namespace cisamr::geometry

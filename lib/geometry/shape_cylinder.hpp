@@ -1,10 +1,9 @@
 #pragma once
 // Finite cylinders with flat caps (exact side; convex).
-#include "geometry/shape_model.hpp"
+#include "geometry/shape_family.hpp"
 
 namespace cisamr::geometry {
 
-std::unique_ptr<SurfaceModel> make_cylinder_model(const Shape& shape, const std::string& source,
-                                                  const std::string& field);
+const ShapeFamily& cylinder_family();
 
 }  // namespace cisamr::geometry

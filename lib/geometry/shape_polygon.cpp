@@ -3,10 +3,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "core/error.hpp"
 #include "geometry/box_index.hpp"
 #include "geometry/box_tests.hpp"
+#include "geometry/shape_model.hpp"
+#include "geometry/shape_family.hpp"
+#include "geometry/shapes_detail.hpp"
 
 namespace cisamr::geometry {
 namespace {
@@ -187,9 +191,82 @@ class PolygonModel final : public CurveModel {
 
 }  // namespace
 
-std::unique_ptr<CurveModel> make_polygon_model(const Polygon& polygon, const std::string& source,
-                                               const std::string& field) {
-  return std::make_unique<PolygonModel>(polygon, source, field);
+// ---------------------------------------------------------------- scene descriptors
+
+namespace {
+
+double polygon_area(const std::vector<Vec2>& v) {
+  double s = 0;
+  for (std::size_t i = 0, j = v.size() - 1; i < v.size(); j = i++) s += v[j][0] * v[i][1] - v[i][0] * v[j][1];
+  return 0.5 * std::abs(s);
+}
+
+bool is_convex_polygon(const std::vector<Vec2>& v) {
+  int sign = 0;
+  for (std::size_t i = 0; i < v.size(); ++i) {
+    const int o = exact::orientation(v[i], v[(i + 1) % v.size()], v[(i + 2) % v.size()]);
+    if (o == 0) continue;
+    if (sign == 0) sign = o;
+    else if (o != sign) return false;
+  }
+  return true;
+}
+
+class PolygonFamily final : public FamilyOf<Polygon> {
+ public:
+  std::string_view name() const override { return "polygon"; }
+  int dimension() const override { return 2; }
+  Box3 bounding_box(const Shape& s) const override { return detail::points_box(of(s).vertices); }
+  double measure(const Shape& s) const override { return polygon_area(of(s).vertices); }
+  double boundary_measure(const Shape& s) const override {
+    const auto& v = of(s).vertices;
+    double l = 0;
+    for (std::size_t i = 0; i < v.size(); ++i) {
+      const Vec2& a = v[i];
+      const Vec2& b = v[(i + 1) % v.size()];
+      l += std::hypot(b[0] - a[0], b[1] - a[1]);
+    }
+    return l;
+  }
+  std::vector<Vec3> boundary_samples(const Shape& s, double spacing) const override {
+    return detail::resampled_ring(of(s).vertices, spacing);
+  }
+  bool contains(const Shape& s, const Vec3& p) const override {
+    return exact::polygon_side(of(s).vertices, {p[0], p[1]}) >= 0;
+  }
+  void translate(Shape& s, const Vec3& o) const override {
+    for (Vec2& v : of(s).vertices) v[0] += o[0], v[1] += o[1];
+  }
+  bool convex(const Shape& s) const override { return is_convex_polygon(of(s).vertices); }
+  double support(const Shape& s, const Vec3& d) const override {
+    double h = -std::numeric_limits<double>::infinity();
+    for (const Vec2& v : of(s).vertices) h = std::max(h, v[0] * d[0] + v[1] * d[1]);
+    return h;
+  }
+  // Exact: a vertex of one inside the other, or two edges that meet (or come within gap).
+  std::optional<bool> overlap_same_family(const Shape& a, const Shape& b, double gap) const override {
+    const auto& u = of(a).vertices;
+    const auto& v = of(b).vertices;
+    if (exact::polygon_side(v, u[0]) >= 0 || exact::polygon_side(u, v[0]) >= 0) return true;
+    for (std::size_t i = 0; i < u.size(); ++i)
+      for (std::size_t j = 0; j < v.size(); ++j) {
+        const Vec2 &p0 = u[i], &p1 = u[(i + 1) % u.size()], &q0 = v[j], &q1 = v[(j + 1) % v.size()];
+        if (exact::segments_intersect(p0, p1, q0, q1)) return true;
+        if (gap > 0 && detail::segments_distance(p0, p1, q0, q1) <= gap) return true;
+      }
+    return false;
+  }
+  std::unique_ptr<CurveModel> curve_model(const Shape& s, const std::string& source,
+                                          const std::string& field) const override {
+    return std::make_unique<PolygonModel>(of(s), source, field);
+  }
+};
+
+}  // namespace
+
+const ShapeFamily& polygon_family() {
+  static const PolygonFamily family;
+  return family;
 }
 
 }  // namespace cisamr::geometry

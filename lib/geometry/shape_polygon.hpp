@@ -1,10 +1,9 @@
 #pragma once
 // Simple polygons, either orientation (exact predicates throughout).
-#include "geometry/shape_model.hpp"
+#include "geometry/shape_family.hpp"
 
 namespace cisamr::geometry {
 
-std::unique_ptr<CurveModel> make_polygon_model(const Polygon& polygon, const std::string& source,
-                                               const std::string& field);
+const ShapeFamily& polygon_family();
 
 }  // namespace cisamr::geometry

@@ -1,33 +1,70 @@
-// The one place that knows every shape family: scene descriptor → ShapeModel. Adding
-// a shape means adding its shape_<family>.{hpp,cpp} and one line here.
+// The one place that lists the shape families, one per alternative of the Shape variant
+// (scene.hpp), in the variant's order. Adding a shape means adding its
+// shape_<family>.{hpp,cpp}, its alternative in scene.hpp and one line here.
+#include <array>
+#include <stdexcept>
+
 #include "core/error.hpp"
 #include "geometry/shape_circle_ellipse.hpp"
 #include "geometry/shape_cylinder.hpp"
+#include "geometry/shape_model.hpp"
 #include "geometry/shape_nurbs_curve.hpp"
+#include "geometry/shape_nurbs_surface.hpp"
 #include "geometry/shape_polygon.hpp"
 #include "geometry/shape_sphere_ellipsoid.hpp"
 #include "geometry/shape_stl.hpp"
 
 namespace cisamr::geometry {
 
+const ShapeFamily& shape_family(const Shape& s) {
+  static const std::array<const ShapeFamily*, std::variant_size_v<Shape>> families{
+      &circle_family(),     // Circle
+      &ellipse_family(),    // Ellipse
+      &polygon_family(),    // Polygon
+      &nurbs_curve_family(),  // NurbsCurve
+      &sphere_family(),     // Sphere
+      &ellipsoid_family(),  // Ellipsoid
+      &cylinder_family(),   // Cylinder
+      &stl_family(),        // StlSurface
+      &nurbs_surface_family(),  // NurbsSurface
+  };
+  return *families[s.index()];
+}
+
+// Defaults of ShapeFamily (shape_family.hpp).
+
+void ShapeFamily::boundary_samples_within(const Shape& s, double spacing, const Box3& clip, std::vector<Vec3>& points,
+                                          std::vector<double>& areas) const {
+  points.clear();
+  areas.clear();
+  const std::vector<Vec3> all = boundary_samples(s, spacing);
+  const double share = all.empty() ? 0 : boundary_measure(s) / static_cast<double>(all.size());
+  for (const Vec3& p : all)
+    if (point_in_box<3>(p, clip)) points.push_back(p), areas.push_back(share);
+}
+
+double ShapeFamily::support(const Shape&, const Vec3&) const {
+  throw std::logic_error(std::string(name()) + ": no support function (not convex)");
+}
+
+std::unique_ptr<CurveModel> ShapeFamily::curve_model(const Shape&, const std::string& source,
+                                                     const std::string& field) const {
+  throw InputError(source, field + ".shape", "a 3D shape in a 2D scene");
+}
+
+std::unique_ptr<SurfaceModel> ShapeFamily::surface_model(const Shape&, const std::string& source,
+                                                         const std::string& field) const {
+  throw InputError(source, field + ".shape", "a 2D shape in a 3D scene");
+}
+
 template <>
 std::unique_ptr<CurveModel> make_shape_model<2>(const Shape& shape, const std::string& src, const std::string& field) {
-  if (const auto* c = std::get_if<Circle>(&shape)) return make_circle_model(*c, src, field);
-  if (const auto* e = std::get_if<Ellipse>(&shape)) return make_ellipse_model(*e, src, field);
-  if (const auto* p = std::get_if<Polygon>(&shape)) return make_polygon_model(*p, src, field);
-  if (const auto* n = std::get_if<NurbsCurve>(&shape)) return make_nurbs_curve_model(*n, src, field);
-  throw InputError(src, field + ".shape", "a 3D shape in a 2D scene");
+  return shape_family(shape).curve_model(shape, src, field);
 }
 
 template <>
 std::unique_ptr<SurfaceModel> make_shape_model<3>(const Shape& shape, const std::string& src, const std::string& field) {
-  if (std::holds_alternative<Sphere>(shape)) return make_sphere_model(shape, src, field);
-  if (std::holds_alternative<Ellipsoid>(shape)) return make_ellipsoid_model(shape, src, field);
-  if (std::holds_alternative<Cylinder>(shape)) return make_cylinder_model(shape, src, field);
-  if (std::holds_alternative<StlSurface>(shape)) return make_stl_model(shape, src, field);
-  if (std::holds_alternative<NurbsSurface>(shape))
-    throw InputError(src, field + ".shape", "nurbs_surface: not supported yet");
-  throw InputError(src, field + ".shape", "a 2D shape in a 3D scene");
+  return shape_family(shape).surface_model(shape, src, field);
 }
 
 }  // namespace cisamr::geometry

@@ -7,6 +7,7 @@
 #include "core/error.hpp"
 #include "geometry/box_tests.hpp"
 #include "geometry/predicates3.hpp"
+#include "geometry/shape_model.hpp"
 
 namespace cisamr::geometry {
 namespace {
@@ -338,14 +339,225 @@ double ellipsoid_half_extent(const Ellipsoid& e, int d) {
   return std::sqrt(h2);
 }
 
-std::unique_ptr<SurfaceModel> make_sphere_model(const Shape& shape, const std::string& source,
-                                                const std::string& field) {
-  return std::make_unique<SphereModel>(shape, source, field);
+// ---------------------------------------------------------------- scene descriptors
+
+namespace {
+
+// Fibonacci points of the unit sphere, mapped.
+template <class Map>
+std::vector<Vec3> fibonacci(int n, Map&& map) {
+  std::vector<Vec3> out;
+  const double golden = M_PI * (3 - std::sqrt(5.0));
+  for (int i = 0; i < n; ++i) {
+    const double z = 1 - 2 * (i + 0.5) / n, r = std::sqrt(std::max(0.0, 1 - z * z));
+    out.push_back(map(Vec3{r * std::cos(golden * i), r * std::sin(golden * i), z}));
+  }
+  return out;
 }
 
-std::unique_ptr<SurfaceModel> make_ellipsoid_model(const Shape& shape, const std::string& source,
-                                                   const std::string& field) {
-  return std::make_unique<EllipsoidModel>(shape, source, field);
+// Body coordinates of an ellipsoid: columns of `rotation` are the body axes.
+Vec3 to_body(const Ellipsoid& e, const Vec3& p) {
+  const Vec3 d{p[0] - e.center[0], p[1] - e.center[1], p[2] - e.center[2]};
+  Vec3 b{};
+  for (int j = 0; j < 3; ++j) b[j] = e.rotation[0][j] * d[0] + e.rotation[1][j] * d[1] + e.rotation[2][j] * d[2];
+  return b;
+}
+Vec3 from_body(const Ellipsoid& e, const Vec3& b) {
+  Vec3 p = e.center;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) p[i] += e.rotation[i][j] * b[j];
+  return p;
+}
+
+// Midpoint-rule samples of the quadric surface centre + frame·(a sinθ cosφ, b sinθ sinφ,
+// c cosθ) over the parameter rectangle [t0, t1] × [f0, f1], recursively halved; a piece
+// whose points all lie farther than its reach from `clip` is skipped.
+struct QuadricPatches {
+  Vec3 center, semi;
+  Rotation3 frame;  // columns: the body axes in the world
+  double reach_scale, spacing;
+  const Box3& clip;
+  std::vector<Vec3>& points;
+  std::vector<double>& areas;
+
+  Vec3 at(double t, double f, Vec3* dt, Vec3* df) const {
+    const Vec3 body{semi[0] * std::sin(t) * std::cos(f), semi[1] * std::sin(t) * std::sin(f), semi[2] * std::cos(t)};
+    const Vec3 body_t{semi[0] * std::cos(t) * std::cos(f), semi[1] * std::cos(t) * std::sin(f), -semi[2] * std::sin(t)};
+    const Vec3 body_f{-semi[0] * std::sin(t) * std::sin(f), semi[1] * std::sin(t) * std::cos(f), 0};
+    Vec3 p = center;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) {
+        p[i] += frame[i][j] * body[j];
+        (*dt)[i] += frame[i][j] * body_t[j];
+        (*df)[i] += frame[i][j] * body_f[j];
+      }
+    return p;
+  }
+
+  void visit(double t0, double t1, double f0, double f1, int depth) {
+    const double tm = 0.5 * (t0 + t1), fm = 0.5 * (f0 + f1);
+    Vec3 dt{}, df{};
+    const Vec3 p = at(tm, fm, &dt, &df);
+    // Every point of the piece is within `reach` of p (arc lengths along both parameters).
+    const double reach = reach_scale * ((t1 - t0) + (f1 - f0));
+    for (int d = 0; d < 3; ++d)
+      if (!(p[d] + reach >= clip.min[d] && p[d] - reach <= clip.max[d])) return;
+    if (reach <= 2 * spacing || depth >= kMaxDepth) {
+      if (point_in_box<3>(p, clip)) {
+        points.push_back(p);
+        areas.push_back(norm(cross(dt, df)) * (t1 - t0) * (f1 - f0));
+      }
+      return;
+    }
+    visit(t0, tm, f0, fm, depth + 1);
+    visit(t0, tm, fm, f1, depth + 1);
+    visit(tm, t1, f0, fm, depth + 1);
+    visit(tm, t1, fm, f1, depth + 1);
+  }
+
+  static constexpr int kMaxDepth = 52;  // parameter steps near the double resolution of π
+};
+
+void quadric_samples_within(const Vec3& center, const Vec3& semi, const Rotation3& frame, double spacing,
+                            const Box3& clip, std::vector<Vec3>& points, std::vector<double>& areas) {
+  points.clear();
+  areas.clear();
+  const double amax = std::max({semi[0], semi[1], semi[2]});
+  QuadricPatches{center, semi, frame, amax, spacing, clip, points, areas}.visit(0, M_PI, 0, 2 * M_PI, 0);
+}
+
+class SphereFamily final : public FamilyOf<Sphere> {
+ public:
+  std::string_view name() const override { return "sphere"; }
+  int dimension() const override { return 3; }
+  Box3 bounding_box(const Shape& s) const override {
+    const Sphere& sp = of(s);
+    const double r = sp.radius;
+    return {{sp.center[0] - r, sp.center[1] - r, sp.center[2] - r}, {sp.center[0] + r, sp.center[1] + r, sp.center[2] + r}};
+  }
+  double measure(const Shape& s) const override { return 4.0 / 3.0 * M_PI * std::pow(of(s).radius, 3); }
+  double boundary_measure(const Shape& s) const override { return 4 * M_PI * of(s).radius * of(s).radius; }
+  std::vector<Vec3> boundary_samples(const Shape& s, double spacing) const override {
+    const Sphere& sp = of(s);
+    const int n = std::max(12, static_cast<int>(std::ceil(2 * boundary_measure(s) / (spacing * spacing))));
+    return fibonacci(n, [&](const Vec3& u) {
+      return Vec3{sp.center[0] + sp.radius * u[0], sp.center[1] + sp.radius * u[1], sp.center[2] + sp.radius * u[2]};
+    });
+  }
+  void boundary_samples_within(const Shape& s, double spacing, const Box3& clip, std::vector<Vec3>& points,
+                               std::vector<double>& areas) const override {
+    const Sphere& sp = of(s);
+    quadric_samples_within(sp.center, {sp.radius, sp.radius, sp.radius}, Rotation3{{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}},
+                           spacing, clip, points, areas);
+  }
+  bool contains(const Shape& s, const Vec3& p) const override {
+    const Sphere& sp = of(s);
+    const Vec3 d{p[0] - sp.center[0], p[1] - sp.center[1], p[2] - sp.center[2]};
+    return dot(d, d) <= sp.radius * sp.radius;
+  }
+  void translate(Shape& s, const Vec3& o) const override {
+    for (int k = 0; k < 3; ++k) of(s).center[k] += o[k];
+  }
+  bool convex(const Shape&) const override { return true; }
+  double support(const Shape& s, const Vec3& d) const override { return dot(of(s).center, d) + of(s).radius * norm(d); }
+  std::optional<bool> overlap_same_family(const Shape& a, const Shape& b, double gap) const override {
+    const Sphere &sa = of(a), &sb = of(b);
+    const Vec3 d{sa.center[0] - sb.center[0], sa.center[1] - sb.center[1], sa.center[2] - sb.center[2]};
+    const double r = sa.radius + sb.radius + gap;
+    return dot(d, d) <= r * r;
+  }
+  std::unique_ptr<SurfaceModel> surface_model(const Shape& s, const std::string& source,
+                                              const std::string& field) const override {
+    return std::make_unique<SphereModel>(s, source, field);
+  }
+};
+
+class EllipsoidFamily final : public FamilyOf<Ellipsoid> {
+ public:
+  std::string_view name() const override { return "ellipsoid"; }
+  int dimension() const override { return 3; }
+  Box3 bounding_box(const Shape& s) const override {
+    const Ellipsoid& e = of(s);
+    Box3 b{};
+    for (int d = 0; d < 3; ++d) {
+      const double h = ellipsoid_half_extent(e, d);
+      b.min[d] = e.center[d] - h, b.max[d] = e.center[d] + h;
+    }
+    return b;
+  }
+  double measure(const Shape& s) const override {
+    return 4.0 / 3.0 * M_PI * of(s).semi_axes[0] * of(s).semi_axes[1] * of(s).semi_axes[2];
+  }
+  double boundary_measure(const Shape& s) const override {
+    // ∫∫ |r_θ × r_φ|: Gauss–Legendre in θ (64 panels × 8 points), trapezoid in φ.
+    static const double gx[4] = {0.1834346424956498, 0.5255324099163290, 0.7966664774136267, 0.9602898564975363};
+    static const double gw[4] = {0.3626837833783620, 0.3137066458778873, 0.2223810344533745, 0.1012285362903763};
+    const Ellipsoid& e = of(s);
+    const double a = e.semi_axes[0], b = e.semi_axes[1], c = e.semi_axes[2];
+    const int panels = 64, nphi = 256;
+    double total = 0;
+    for (int pn = 0; pn < panels; ++pn) {
+      const double t0 = M_PI * pn / panels, h = M_PI / panels;
+      for (int g = 0; g < 8; ++g) {
+        const double x = g < 4 ? -gx[g] : gx[g - 4], w = gw[g < 4 ? g : g - 4];
+        const double th = t0 + 0.5 * h * (1 + x), st = std::sin(th), ct = std::cos(th);
+        double ring = 0;
+        for (int k = 0; k < nphi; ++k) {
+          const double ph = 2 * M_PI * (k + 0.5) / nphi, cp = std::cos(ph), sp = std::sin(ph);
+          ring += st * std::sqrt(b * b * c * c * st * st * cp * cp + a * a * c * c * st * st * sp * sp + a * a * b * b * ct * ct);
+        }
+        total += 0.5 * h * w * ring * 2 * M_PI / nphi;
+      }
+    }
+    return total;
+  }
+  std::vector<Vec3> boundary_samples(const Shape& s, double spacing) const override {
+    const Ellipsoid& e = of(s);
+    const double amax = std::max({e.semi_axes[0], e.semi_axes[1], e.semi_axes[2]});
+    const int n = std::max(12, static_cast<int>(std::ceil(2 * 4 * M_PI * amax * amax / (spacing * spacing))));
+    return fibonacci(n, [&](const Vec3& u) {
+      return from_body(e, Vec3{e.semi_axes[0] * u[0], e.semi_axes[1] * u[1], e.semi_axes[2] * u[2]});
+    });
+  }
+  void boundary_samples_within(const Shape& s, double spacing, const Box3& clip, std::vector<Vec3>& points,
+                               std::vector<double>& areas) const override {
+    const Ellipsoid& e = of(s);
+    quadric_samples_within(e.center, e.semi_axes, e.rotation, spacing, clip, points, areas);
+  }
+  bool contains(const Shape& s, const Vec3& p) const override {
+    const Ellipsoid& e = of(s);
+    const Vec3 b = to_body(e, p);
+    double q = 0;
+    for (int j = 0; j < 3; ++j) q += (b[j] / e.semi_axes[j]) * (b[j] / e.semi_axes[j]);
+    return q <= 1 + 1e-14;
+  }
+  void translate(Shape& s, const Vec3& o) const override {
+    for (int k = 0; k < 3; ++k) of(s).center[k] += o[k];
+  }
+  bool convex(const Shape&) const override { return true; }
+  double support(const Shape& s, const Vec3& d) const override {
+    const Ellipsoid& e = of(s);
+    Vec3 db{};
+    for (int j = 0; j < 3; ++j)
+      db[j] = e.semi_axes[j] * (e.rotation[0][j] * d[0] + e.rotation[1][j] * d[1] + e.rotation[2][j] * d[2]);
+    return dot(e.center, d) + norm(db);
+  }
+  std::unique_ptr<SurfaceModel> surface_model(const Shape& s, const std::string& source,
+                                              const std::string& field) const override {
+    return std::make_unique<EllipsoidModel>(s, source, field);
+  }
+};
+
+}  // namespace
+
+const ShapeFamily& sphere_family() {
+  static const SphereFamily family;
+  return family;
+}
+
+const ShapeFamily& ellipsoid_family() {
+  static const EllipsoidFamily family;
+  return family;
 }
 
 }  // namespace cisamr::geometry

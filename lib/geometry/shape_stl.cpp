@@ -1,7 +1,11 @@
 // STL surfaces (README: classification, crossings, volumes, distances).
 #include "geometry/shape_stl.hpp"
 
+#include <algorithm>
+#include <cmath>
+
 #include "core/error.hpp"
+#include "geometry/shape_model.hpp"
 #include "geometry/stl_mesh.hpp"
 
 namespace cisamr::geometry {
@@ -86,8 +90,81 @@ class StlModel final : public SurfaceModel {
 
 }  // namespace
 
-std::unique_ptr<SurfaceModel> make_stl_model(const Shape& shape, const std::string& source, const std::string& field) {
-  return std::make_unique<StlModel>(shape, source, field);
+// ---------------------------------------------------------------- scene descriptors
+
+namespace {
+
+// Unvalidated (the oracle's model validates): geometry of whatever the file holds.
+stl::Mesh mesh_of(const StlSurface& s) {
+  stl::Mesh m;
+  stl::build(s, m, false);
+  return m;
+}
+
+class StlFamily final : public FamilyOf<StlSurface> {
+ public:
+  std::string_view name() const override { return "stl"; }
+  int dimension() const override { return 3; }
+  // A surface whose triangles are not loaded (a parallel rank that did not read the file)
+  // has an empty box, no measure, no samples and contains nothing.
+  Box3 bounding_box(const Shape& s) const override {
+    if (of(s).triangles.empty()) return {};
+    return mesh_of(of(s)).box;
+  }
+  double measure(const Shape& s) const override { return of(s).triangles.empty() ? 0.0 : stl::volume(mesh_of(of(s))); }
+  double boundary_measure(const Shape& s) const override {
+    return of(s).triangles.empty() ? 0.0 : stl::surface_area(mesh_of(of(s)));
+  }
+  std::vector<Vec3> boundary_samples(const Shape& s, double spacing) const override {
+    // Vertices, then a barycentric grid on each face fine enough for `spacing`.
+    std::vector<Vec3> out;
+    if (of(s).triangles.empty()) return out;
+    const stl::Mesh m = mesh_of(of(s));
+    out = m.vertices;
+    for (const auto& f : m.faces) {
+      const Vec3 &a = m.vertices[f[0]], &b = m.vertices[f[1]], &c = m.vertices[f[2]];
+      const double longest = std::max({norm(Vec3{b[0] - a[0], b[1] - a[1], b[2] - a[2]}),
+                                       norm(Vec3{c[0] - b[0], c[1] - b[1], c[2] - b[2]}),
+                                       norm(Vec3{a[0] - c[0], a[1] - c[1], a[2] - c[2]})});
+      const int n = std::max(1, static_cast<int>(std::ceil(longest / spacing)));
+      for (int i = 0; i <= n; ++i)
+        for (int j = 0; i + j <= n; ++j) {
+          if ((i == 0 && j == 0) || (i == n) || (j == n)) continue;  // vertices already in
+          const double u = double(i) / n, v = double(j) / n, w = 1 - u - v;
+          out.push_back({w * a[0] + u * b[0] + v * c[0], w * a[1] + u * b[1] + v * c[1], w * a[2] + u * b[2] + v * c[2]});
+        }
+    }
+    return out;
+  }
+  bool contains(const Shape& s, const Vec3& p) const override {
+    return !of(s).triangles.empty() && stl::side(mesh_of(of(s)), p) >= 0;
+  }
+  void translate(Shape& s, const Vec3& o) const override {
+    for (int k = 0; k < 3; ++k) of(s).translate[k] += o[k];
+  }
+  bool judged_by_box() const override { return true; }
+  // Besides the sampled test of shapes_overlap: a mesh edge piercing the other mesh.
+  bool edges_pierce(const Shape& a, const Shape& b) const override {
+    const stl::Mesh ma = mesh_of(of(a)), mb = mesh_of(of(b));
+    std::vector<double> ts;
+    for (const auto& f : ma.faces)
+      for (int e = 0; e < 3; ++e) {
+        stl::segment_hits(mb, ma.vertices[f[e]], ma.vertices[f[(e + 1) % 3]], ts);
+        if (!ts.empty()) return true;
+      }
+    return false;
+  }
+  std::unique_ptr<SurfaceModel> surface_model(const Shape& s, const std::string& source,
+                                              const std::string& field) const override {
+    return std::make_unique<StlModel>(s, source, field);
+  }
+};
+
+}  // namespace
+
+const ShapeFamily& stl_family() {
+  static const StlFamily family;
+  return family;
 }
 
 }  // namespace cisamr::geometry

@@ -13,6 +13,7 @@
 #include <numeric>
 
 #include "core/error.hpp"
+#include "geometry/shapes.hpp"
 #include "pack/pack.hpp"
 #include "pack/particles.hpp"
 #include "pack/random.hpp"
@@ -632,7 +633,7 @@ bool Packer::place(int ti) {
 }
 
 void Packer::raster_add(PopState& s, const Template& t, const Vec3& pos) {
-  Shape shape = moved(t.shape, pos);
+  Shape shape = translated(t.shape, pos);
   if (auto* c = std::get_if<NurbsCurve>(&shape)) {  // rasterise its fine polyline
     Polygon poly;
     std::vector<Vec2> cp(c->control_points.begin(), c->control_points.end() - 3);
@@ -795,7 +796,7 @@ PackResult Packer::run() {
   for (const Placed& pl : placed_) {
     const Template& t = templates_[pl.tmpl];
     const PopState& s = pops_[t.population];
-    scene.inclusions.push_back({moved(t.shape, pl.position), s.spec->phase, s.levels});
+    scene.inclusions.push_back({translated(t.shape, pl.position), s.spec->phase, s.levels});
   }
   PackReport& rep = report_;
   double domain_measure = 1;

@@ -123,18 +123,9 @@ std::vector<Vec3> periodic_cubic_polyline(const std::vector<Vec2>& cp, int per_s
 }
 
 Box3 particle_box(const Shape& shape) {
-  if (const auto* c = std::get_if<NurbsCurve>(&shape)) {  // the control points' box contains the blob
-    Box3 b{{INFINITY, INFINITY, 0}, {-INFINITY, -INFINITY, 0}};
-    for (const auto& p : c->control_points)
-      for (int d = 0; d < 2; ++d) {
-        b.min[d] = std::min(b.min[d], p[d]);
-        b.max[d] = std::max(b.max[d], p[d]);
-      }
-    return b;
-  }
   if (std::holds_alternative<StlSurface>(shape) || std::holds_alternative<NurbsSurface>(shape))
     throw std::invalid_argument("pack: unsupported shape");
-  return shape_bounding_box(shape);
+  return shape_holding_box(shape);  // a blob: the control points' box contains it
 }
 
 double particle_measure(const Shape& shape) {
@@ -282,36 +273,6 @@ std::uint64_t secondary_cover(const Shape& shape, const Box3& box, int dim) {
   return mask;
 }
 
-Shape moved(const Shape& shape, const Vec3& o) {
-  return std::visit(
-      Overloaded{
-          [&](Circle c) -> Shape { c.center[0] += o[0]; c.center[1] += o[1]; return c; },
-          [&](Ellipse e) -> Shape { e.center[0] += o[0]; e.center[1] += o[1]; return e; },
-          [&](Polygon p) -> Shape {
-            for (auto& v : p.vertices) { v[0] += o[0]; v[1] += o[1]; }
-            return p;
-          },
-          [&](NurbsCurve c) -> Shape {
-            for (auto& v : c.control_points) { v[0] += o[0]; v[1] += o[1]; }
-            return c;
-          },
-          [&](Sphere s) -> Shape { for (int d = 0; d < 3; ++d) s.center[d] += o[d]; return s; },
-          [&](Ellipsoid e) -> Shape { for (int d = 0; d < 3; ++d) e.center[d] += o[d]; return e; },
-          [&](Cylinder c) -> Shape {
-            for (int d = 0; d < 3; ++d) { c.start[d] += o[d]; c.end[d] += o[d]; }
-            return c;
-          },
-          [&](StlSurface s) -> Shape { for (int d = 0; d < 3; ++d) s.translate[d] += o[d]; return s; },
-          [&](NurbsSurface s) -> Shape {
-            for (auto& patch : s.patches)
-              for (auto& v : patch.control_points)
-                for (int d = 0; d < 3; ++d) v[d] += o[d];
-            return s;
-          },
-      },
-      shape);
-}
-
 Shape scaled_about_origin(const Shape& shape, double f) {
   return std::visit(
       Overloaded{
@@ -333,7 +294,7 @@ Shape scaled_about_origin(const Shape& shape, double f) {
             for (auto& t : s.translate) t *= f;
             return s;
           },
-          [&](NurbsSurface s) -> Shape { return s; },
+          [&](const auto& s) -> Shape { return s; },  // families the packer does not generate
       },
       shape);
 }

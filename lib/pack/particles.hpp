@@ -37,8 +37,7 @@ std::vector<Vec3> periodic_cubic_polyline(const std::vector<Vec2>& control_point
 constexpr int secondary_cells_per_axis(int dim) { return dim == 2 ? 8 : 4; }
 std::uint64_t secondary_cover(const geometry::Shape& s, const Box3& box, int dim);
 
-// The same shape moved by `offset`, or scaled by `factor` about the origin.
-geometry::Shape moved(const geometry::Shape& s, const Vec3& offset);
+// The same shape scaled by `factor` about the origin (moving it: geometry::translated).
 geometry::Shape scaled_about_origin(const geometry::Shape& s, double factor);
 
 // STL triangles (ASCII or binary), 9 coordinates per triangle.

@@ -20,6 +20,8 @@ class Accumulator {
   explicit Accumulator(LoadField& f) : f_(f) {}
 
   // Adds `value` at point x (wrapped when periodic, dropped outside the domain otherwise).
+  const LoadField& field() const { return f_; }
+
   void add_point(Vec3 x, double value) {
     const std::int64_t c = cell_of(x);
     if (c >= 0) f_.cells[static_cast<std::size_t>(c)] += value;
@@ -95,9 +97,26 @@ class Accumulator {
   LoadField& f_;
 };
 
+bool box_within(const Box3& inner, const Box3& outer) {
+  for (int d = 0; d < 3; ++d)
+    if (!(inner.min[d] >= outer.min[d] && inner.max[d] <= outer.max[d])) return false;
+  return true;
+}
+
+// ceil(x), at least `least`, at most `most` (also for x = inf or NaN): sample counts stay
+// bounded and their conversion defined, however large the shape.
+std::int64_t sample_count(double x, std::int64_t least, std::int64_t most) {
+  if (!(x < static_cast<double>(most))) return most;
+  return std::max(least, static_cast<std::int64_t>(std::ceil(x)));
+}
+// Per ring and per cap radius (binds only for radii beyond ~1,300 sample spacings).
+constexpr std::int64_t kMaxRingSamples = std::int64_t{1} << 13;
+
 // Cylinders keep their own midpoint quadrature (rings at the middle of equal slices, caps in
 // rings of equal area): geometry's cylinder samples lie on rings at t = i/n, which for fibres
 // ending on the lattice sit exactly on raster planes and put whole rings on one side.
+// In a bounded domain only the slices whose rings can meet it are visited: a fibre far
+// longer than the domain costs what its part inside costs.
 void add_cylinder(Accumulator& acc, const Cylinder& cy, double weight, double spacing) {
   Vec3 u{cy.end[0] - cy.start[0], cy.end[1] - cy.start[1], cy.end[2] - cy.start[2]};
   const double len = std::sqrt(sq(u[0]) + sq(u[1]) + sq(u[2]));
@@ -109,12 +128,29 @@ void add_cylinder(Accumulator& acc, const Cylinder& cy, double weight, double sp
   for (auto& v : e1) v /= n1;
   const Vec3 e2{u[1] * e1[2] - u[2] * e1[1], u[2] * e1[0] - u[0] * e1[2], u[0] * e1[1] - u[1] * e1[0]};
   const double r = cy.radius;
-  const int nphi = std::max(32, static_cast<int>(std::ceil(2 * M_PI * r / spacing)));
-  const int nt = std::max(4, static_cast<int>(std::ceil(len / spacing)));
+  const std::int64_t nphi = sample_count(2 * M_PI * r / spacing, 32, kMaxRingSamples);
+  const std::int64_t nt = sample_count(len / spacing, 4, std::int64_t{1} << 52);
+  // A ring at axial position t lies in the plane x·u = start·u + t; it meets the domain box
+  // only if that plane does (the box's corners span the range of x·u), give or take rounding.
+  std::int64_t first = 0, last = nt - 1;
+  const LoadField& f = acc.field();
+  if (!f.periodic) {
+    double lo = INFINITY, hi = -INFINITY;
+    for (int corner = 0; corner < 8; ++corner) {
+      double t = 0;
+      for (int k = 0; k < 3; ++k) t += ((corner >> k & 1) ? f.domain.max[k] : f.domain.min[k]) * u[k] - cy.start[k] * u[k];
+      lo = std::min(lo, t), hi = std::max(hi, t);
+    }
+    // Slice i's ring sits at t = (i + ½)·len/nt; one slice of margin against rounding.
+    const double slices = static_cast<double>(nt) / len;
+    const double top = static_cast<double>(nt - 1);
+    first = static_cast<std::int64_t>(std::clamp(std::floor(lo * slices - 0.5) - 1, 0.0, top + 1));
+    last = static_cast<std::int64_t>(std::clamp(std::ceil(hi * slices - 0.5) + 1, -1.0, top));
+  }
   const double w_lat = weight * 2 * M_PI * r * len / (double(nphi) * nt);
-  for (int i = 0; i < nt; ++i) {
+  for (std::int64_t i = first; i <= last; ++i) {
     const double t = (i + 0.5) / nt * len;
-    for (int j = 0; j < nphi; ++j) {
+    for (std::int64_t j = 0; j < nphi; ++j) {
       const double phi = 2 * M_PI * (j + 0.5) / nphi;
       Vec3 x{};
       for (int k = 0; k < 3; ++k)
@@ -122,14 +158,14 @@ void add_cylinder(Accumulator& acc, const Cylinder& cy, double weight, double sp
       acc.add_point(x, w_lat);
     }
   }
-  const int nr = std::max(2, static_cast<int>(std::ceil(r / spacing)));
+  const std::int64_t nr = sample_count(r / spacing, 2, kMaxRingSamples / 2);
   for (int cap = 0; cap < 2; ++cap) {
     const Vec3& o = cap == 0 ? cy.start : cy.end;
-    for (int k = 0; k < nr; ++k) {
+    for (std::int64_t k = 0; k < nr; ++k) {
       const double r0 = r * k / nr, r1 = r * (k + 1) / nr, rm = 0.5 * (r0 + r1);
-      const int np = std::max(8, static_cast<int>(std::ceil(2 * M_PI * rm / spacing)));
+      const std::int64_t np = sample_count(2 * M_PI * rm / spacing, 8, kMaxRingSamples);
       const double w = weight * M_PI * (r1 * r1 - r0 * r0) / np;
-      for (int j = 0; j < np; ++j) {
+      for (std::int64_t j = 0; j < np; ++j) {
         const double phi = 2 * M_PI * (j + 0.5) / np;
         Vec3 x{};
         for (int q = 0; q < 3; ++q) x[q] = o[q] + rm * (std::cos(phi) * e1[q] + std::sin(phi) * e2[q]);
@@ -208,6 +244,16 @@ void add_inclusion(Accumulator& acc, const Inclusion& inc, double weight, double
     }
     return acc.add_polyline(poly, weight, spacing, shape_boundary_measure(inc.shape) / length);
   }
+  // Only what lies in a bounded domain counts: a surface that reaches out of it is
+  // sampled there only, so that its cost follows the part inside.
+  const LoadField& f = acc.field();
+  if (!f.periodic && !box_within(shape_bounding_box(inc.shape), f.domain)) {
+    std::vector<Vec3> pts;
+    std::vector<double> area;
+    shape_boundary_samples_within(inc.shape, spacing, f.domain, pts, area);
+    for (std::size_t i = 0; i < pts.size(); ++i) acc.add_point(pts[i], weight * area[i]);
+    return;
+  }
   const auto pts = shape_boundary_samples(inc.shape, spacing);
   if (pts.empty()) return;
   const std::vector<double> area = sample_areas(inc.shape, pts);
@@ -220,27 +266,7 @@ int effective_levels(const SceneDesc& scene, const Inclusion& inc) {
   return std::max(1, inc.levels > 0 ? inc.levels : scene.levels);
 }
 
-Box3 inclusion_box(const Shape& shape) {
-  // NURBS: the box of the control points (it contains the curve or surface).
-  auto control_box = [](const auto& points, Box3& b) {
-    for (const auto& p : points)
-      for (std::size_t d = 0; d < p.size(); ++d) {
-        b.min[d] = std::min(b.min[d], p[d]);
-        b.max[d] = std::max(b.max[d], p[d]);
-      }
-  };
-  if (const auto* c = std::get_if<NurbsCurve>(&shape)) {
-    Box3 b{{INFINITY, INFINITY, 0}, {-INFINITY, -INFINITY, 0}};
-    control_box(c->control_points, b);
-    return b;
-  }
-  if (const auto* s = std::get_if<NurbsSurface>(&shape)) {
-    Box3 b{{INFINITY, INFINITY, INFINITY}, {-INFINITY, -INFINITY, -INFINITY}};
-    for (const auto& patch : s->patches) control_box(patch.control_points, b);
-    return b;
-  }
-  return shape_bounding_box(shape);
-}
+Box3 inclusion_box(const Shape& shape) { return shape_holding_box(shape); }
 
 double LoadField::box_load(const std::array<std::int64_t, 3>& lo, const std::array<std::int64_t, 3>& hi) const {
   const std::int64_t sx = n[0] + 1, sy = n[1] + 1;

@@ -46,8 +46,7 @@ LoadField build_load_field(const geometry::SceneDesc& scene, const PartitionOpti
 // without refinement still costs its cut elements).
 int effective_levels(const geometry::SceneDesc& scene, const geometry::Inclusion& inc);
 
-// Axis-aligned bounding box of any scene shape (geometry::shape_bounding_box; NURBS: the box
-// of the control points).
+// Axis-aligned box that holds any scene shape (geometry::shape_holding_box).
 Box3 inclusion_box(const geometry::Shape& s);
 
 }  // namespace cisamr::partition

@@ -84,26 +84,13 @@ void draw_outlines(std::ostringstream& s, const Partition& p, const Panel& pan, 
 
 void draw_inclusions_2d(std::ostringstream& s, const SceneDesc& scene, const Panel& pan) {
   const std::string style = " fill=\"#606060\" fill-opacity=\"0.55\" stroke=\"#303030\" stroke-width=\"0.3\"";
+  // Every family alike: a polygon through 64 boundary pieces (an exact polygon's edges
+  // are cut, not bent).
   for (const auto& inc : scene.inclusions) {
-    if (auto* c = std::get_if<Circle>(&inc.shape)) {
-      s << "<circle cx=\"" << fmt(pan.px(c->center[0])) << "\" cy=\"" << fmt(pan.py(c->center[1])) << "\" r=\""
-        << fmt(c->radius * pan.scale) << "\"" << style << "/>\n";
-    } else if (auto* e = std::get_if<Ellipse>(&inc.shape)) {
-      const double cx = pan.px(e->center[0]), cy = pan.py(e->center[1]);
-      s << "<ellipse cx=\"" << fmt(cx) << "\" cy=\"" << fmt(cy) << "\" rx=\"" << fmt(e->semi_axes[0] * pan.scale)
-        << "\" ry=\"" << fmt(e->semi_axes[1] * pan.scale) << "\" transform=\"rotate(" << fmt(-e->angle * 180 / M_PI)
-        << " " << fmt(cx) << " " << fmt(cy) << ")\"" << style << "/>\n";
-    } else {
-      std::vector<Vec2> pts;
-      if (auto* poly = std::get_if<Polygon>(&inc.shape)) pts = poly->vertices;
-      if (std::holds_alternative<NurbsCurve>(inc.shape))
-        for (const Vec3& q : shape_boundary_samples(inc.shape, shape_boundary_measure(inc.shape) / 64))
-          pts.push_back({q[0], q[1]});
-      if (pts.empty()) continue;
-      s << "<polygon points=\"";
-      for (const auto& q : pts) s << fmt(pan.px(q[0])) << "," << fmt(pan.py(q[1])) << " ";
-      s << "\"" << style << "/>\n";
-    }
+    s << "<polygon points=\"";
+    for (const Vec3& q : shape_boundary_samples(inc.shape, shape_boundary_measure(inc.shape) / 64))
+      s << fmt(pan.px(q[0])) << "," << fmt(pan.py(q[1])) << " ";
+    s << "\"" << style << "/>\n";
   }
 }
 

@@ -14,6 +14,7 @@
 #include <tuple>
 
 #include "core/error.hpp"
+#include "geometry/oracle.hpp"
 #include "partition/load_field.hpp"
 #include "partition/partition.hpp"
 
@@ -269,6 +270,12 @@ LoadField checked_field(const geometry::SceneDesc& scene, int n, const Partition
   if (n < 1) throw InputError(scene.source, "n", "the number of partitions must be at least 1");
   if (scene.dimension != 2 && scene.dimension != 3)
     throw InputError(scene.source, "dimension", "must be 2 or 3");
+  // The sequential mesher's checks (its oracle's), so that partitioning and the
+  // distributed mesher refuse the same scenes with the same message.
+  if (scene.dimension == 2)
+    geometry::validate_inclusions<2>(scene);
+  else
+    geometry::validate_inclusions<3>(scene);
   LoadField f = build_load_field(scene, options, given);
   if (f.n[0] * f.n[1] * f.n[2] < n)
     throw InputError(scene.source, "n", "more partitions (" + std::to_string(n) + ") than lattice cells");

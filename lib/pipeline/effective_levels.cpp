@@ -16,11 +16,12 @@ constexpr double kContactCells = Dim == 2 ? 1.5 : 1.8;  // > √Dim: a cell touc
 template <int Dim>
 constexpr double kSpreadCells = Dim == 2 ? 6.5 : 8.0;  // 2D: R4's 5×5 block, both cells' diagonals, a 2:1 cascade
 
+// Buckets per axis of the pair search at most (about 4M buckets in 2D, 2M in 3D).
+template <int Dim>
+constexpr double kMaxBucketsPerAxis = Dim == 2 ? 2048 : 128;
+
 // Shapes whose distance is judged by their boxes (exact tests too slow or not available).
-bool by_box(const geometry::Shape& s) {
-  return std::holds_alternative<geometry::NurbsCurve>(s) || std::holds_alternative<geometry::StlSurface>(s) ||
-         std::holds_alternative<geometry::NurbsSurface>(s);
-}
+bool by_box(const geometry::Shape& s) { return geometry::shape_judged_by_box(s); }
 
 template <int Dim>
 double box_distance(const Box3& a, const Box3& b) {
@@ -41,24 +42,37 @@ std::vector<int> effective_levels(const geometry::SceneDesc& scene, const grid::
   if (n < 2) return level;
   const std::vector<Box3> box = holding_boxes(scene, known);
 
-  // Candidate pairs: boxes closer than the widest reach (coarsest level), by buckets.
+  // Candidate pairs: boxes closer than the widest reach (coarsest level), by buckets over
+  // the domain grown by that reach. An inclusion whose box misses the domain has no cell to
+  // refine and takes part in no pair (its own level stays); clamping coordinates into the
+  // grid keeps far-away boxes from blowing up the bucket indices.
   int min_level = lattice.max_level;
   for (int l : level) min_level = std::min(min_level, l);
   const double reach = kSpreadCells<Dim> * lattice.spacing(min_level);
-  const double side = std::max(reach, 4 * lattice.h);
+  Vec3 grid_min{}, grid_max{};
+  double side = std::max(reach, 4 * lattice.h);
+  for (int d = 0; d < Dim; ++d) {
+    grid_min[d] = scene.domain_min[static_cast<std::size_t>(d)] - reach;
+    grid_max[d] = scene.domain_max[static_cast<std::size_t>(d)] + reach;
+    // At most about kMaxBucketsPerAxis buckets per axis: the side only sets the cost of the
+    // search, not which pairs it finds.
+    side = std::max(side, (grid_max[d] - grid_min[d]) / kMaxBucketsPerAxis<Dim>);
+  }
   using Cell = std::array<std::int64_t, Dim>;
   const auto bucket = [&](const Vec3& p) {
     Cell c{};
     for (int d = 0; d < Dim; ++d)
-      c[d] = static_cast<std::int64_t>(std::floor((p[d] - scene.domain_min[static_cast<std::size_t>(d)]) / side));
+      c[d] = static_cast<std::int64_t>(std::floor((std::clamp(p[d], grid_min[d], grid_max[d]) - grid_min[d]) / side));
     return c;
   };
-  Cell lo{}, hi{};
-  for (int d = 0; d < Dim; ++d) lo[d] = INT64_MAX, hi[d] = INT64_MIN;
-  for (const Box3& b : box) {
-    const Cell a = bucket(b.min), c = bucket(b.max);
-    for (int d = 0; d < Dim; ++d) lo[d] = std::min(lo[d], a[d]), hi[d] = std::max(hi[d], c[d]);
-  }
+  const Cell lo{}, hi = bucket(grid_max);
+  const auto in_domain = [&](const Box3& b) {
+    for (int d = 0; d < Dim; ++d)
+      if (!(b.max[d] >= scene.domain_min[static_cast<std::size_t>(d)] &&
+            b.min[d] <= scene.domain_max[static_cast<std::size_t>(d)]))
+        return false;
+    return true;
+  };
   // Visits the buckets of [a, c] clipped to the grid, as flat indices.
   const auto for_buckets = [&](Cell a, Cell c, auto&& f) {
     for (int d = 0; d < Dim; ++d) {
@@ -80,7 +94,8 @@ std::vector<int> effective_levels(const geometry::SceneDesc& scene, const grid::
   for (int d = 0; d < Dim; ++d) buckets *= hi[d] - lo[d] + 1;
   std::vector<std::vector<std::int32_t>> members(static_cast<std::size_t>(buckets));
   for (std::size_t k = 0; k < n; ++k)
-    for_buckets(bucket(box[k].min), bucket(box[k].max), [&](std::size_t b) { members[b].push_back(static_cast<std::int32_t>(k)); });
+    if (in_domain(box[k]))
+      for_buckets(bucket(box[k].min), bucket(box[k].max), [&](std::size_t b) { members[b].push_back(static_cast<std::int32_t>(k)); });
   // Closer than `gap`? Exact for analytic shapes; by boxes otherwise (can only over-refine).
   const auto close = [&](std::size_t i, std::size_t j, double gap) {
     const auto& a = scene.inclusions[i].shape;
@@ -95,6 +110,7 @@ std::vector<int> effective_levels(const geometry::SceneDesc& scene, const grid::
   std::vector<Pair> pairs;
   std::vector<std::vector<std::int32_t>> neighbours(n);
   for (std::size_t k = 0; k < n; ++k) {
+    if (!in_domain(box[k])) continue;
     Vec3 a = box[k].min, c = box[k].max;
     for (int d = 0; d < 3; ++d) a[d] -= reach, c[d] += reach;
     for_buckets(bucket(a), bucket(c), [&](std::size_t b) {
@@ -156,21 +172,12 @@ std::vector<Box3> holding_boxes(const geometry::SceneDesc& scene, std::span<cons
   out.reserve(scene.inclusions.size());
   for (std::size_t k = 0; k < scene.inclusions.size(); ++k) {
     const geometry::Shape& shape = scene.inclusions[k].shape;
-    // geometry's tight box of a NURBS curve costs ~0.2 s per curve: too much for a scene.
-    if (const auto* c = std::get_if<geometry::NurbsCurve>(&shape); c != nullptr && !c->control_points.empty()) {
-      const Vec2& p0 = c->control_points.front();
-      Box3 b{{p0[0], p0[1], 0}, {p0[0], p0[1], 0}};
-      for (const Vec2& p : c->control_points)
-        for (int d = 0; d < 2; ++d) b.min[d] = std::min(b.min[d], p[d]), b.max[d] = std::max(b.max[d], p[d]);
-      out.push_back(b);
-      continue;
-    }
     const auto* stl = std::get_if<geometry::StlSurface>(&shape);
     if (stl != nullptr && stl->triangles.empty() && k < known.size()) {
       out.push_back(known[k]);
       continue;
     }
-    out.push_back(geometry::shape_bounding_box(shape));
+    out.push_back(geometry::shape_holding_box(shape));
   }
   return out;
 }

@@ -2,6 +2,7 @@
 // better balance than a uniform grid on a clustered scene, the paper's Fig. 3 merge.
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
 #include <nlohmann/json.hpp>
 
@@ -109,6 +110,29 @@ TEST(PartitionLoad, ClippedOutsideAndWrappedWhenPeriodic) {
   EXPECT_NEAR(partition::total_load(s), 2 * M_PI * 2, 1e-9);
 }
 
+TEST(PartitionLoad, SurfacesCountOnlyInsideTheDomain) {
+  // A sphere of radius 0.6 around the centre of the unit cube pokes out through six caps
+  // (which meet neither each other nor the cube's edges).
+  SceneDesc s = base_scene(3, 1, 0.05);
+  s.inclusions.push_back({Sphere{{0.5, 0.5, 0.5}, 0.6}, 2, 1});
+  const double r = 0.6, inside = 4 * M_PI * r * r - 6 * 2 * M_PI * r * (r - 0.5);
+  EXPECT_NEAR(partition::total_load(s), inside, 1e-2 * inside);  // leaves cut by the faces
+  // The same through a rotated ellipsoid of equal axes.
+  s.inclusions[0].shape = Ellipsoid{{0.5, 0.5, 0.5}, {r, r, r}, quaternion_rotation(0.8, 0.6, 0, 0)};
+  EXPECT_NEAR(partition::total_load(s), inside, 1e-2 * inside);  // leaves cut by the faces
+}
+
+TEST(PartitionLoad, AFibreFarLongerThanTheDomainCostsItsPartInside) {
+  // Along z through the unit cube, 2e7 long: 3.2e8 slices of rings, of which ~16 meet it.
+  SceneDesc s = base_scene(3, 1, 0.25);
+  s.inclusions.push_back({Cylinder{{0.5, 0.5, -1e7}, {0.5, 0.5, 1e7}, 0.1}, 2, 1});
+  const auto start = std::chrono::steady_clock::now();
+  const double load = partition::total_load(s);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  EXPECT_NEAR(load, 2 * M_PI * 0.1, 1e-9);  // the lateral surface inside; the caps are far
+  EXPECT_LT(seconds, 5.0);
+}
+
 TEST(PartitionLoad, EllipsePerimeterIsExact) {  // the |A_k| the load field scales its samples to
   auto perimeter = [](double a, double b) { return shape_boundary_measure(Ellipse{{3, 4}, {a, b}, 0.7}); };
   EXPECT_NEAR(perimeter(1, 1), 2 * M_PI, 1e-14);
@@ -203,7 +227,33 @@ TEST(Partition, JsonIsCompleteAndDeterministic) {
   EXPECT_GE(listed, s.inclusions.size());  // every inclusion is listed by a part that meets it
   const std::string svg = partition::to_svg(a, s);
   EXPECT_NE(svg.find("<svg"), std::string::npos);
-  EXPECT_NE(svg.find("<circle"), std::string::npos);
+  EXPECT_NE(svg.find("<polygon"), std::string::npos);  // the inclusions
+}
+
+// Partitioning (and so the distributed mesher) refuses what the sequential mesher's oracle
+// refuses, with the same message, even for shapes outside the domain.
+TEST(Partition, ValidatesShapesAsTheOracleDoes) {
+  const auto message = [](const SceneDesc& s) {
+    try {
+      partition::partition_domain(s, 2);
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  SceneDesc s = base_scene(2, 10, 1);
+  s.source = "scene.json";
+  s.inclusions.push_back({Polygon{{{20, 20}, {20, 20}, {20, 20}, {20, 20}}}, 2, 1});
+  EXPECT_NE(message(s).find("scene.json: inclusions[0].vertices: a polygon needs at least 3 distinct vertices"),
+            std::string::npos)
+      << message(s);
+  NurbsCurve open;  // quadratic, clamped, its ends apart
+  open.degree = 2;
+  open.knots = {0, 0, 0, 0.5, 1, 1, 1};
+  open.control_points = {{2, 2}, {8, 2}, {8, 8}, {2, 8}};
+  s.inclusions[0].shape = open;
+  EXPECT_NE(message(s).find("scene.json: inclusions[0].control_points: curve is not closed"), std::string::npos)
+      << message(s);
 }
 
 TEST(Partition, BadCountsAreInputErrors) {
