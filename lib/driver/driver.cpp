@@ -1,6 +1,10 @@
 #include "driver/driver.hpp"
 
+#include <unistd.h>
+
 #include <algorithm>
+#include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <type_traits>
 #include <utility>
@@ -20,6 +24,55 @@ namespace {
 
 void tell(const Comm& comm, const Options& options, const std::string& what) {
   if (options.progress && comm.rank() == 0) options.progress(what);
+}
+
+std::string about(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.2g", value);
+  return text;
+}
+
+// Refuses, before any memory is taken, a mesh estimated above Options::max_elements, and
+// more partitions than coarse cells. Throws InputError naming the scene's field.
+template <int Dim>
+void check_request(const geometry::SceneDesc& scene, const Options& options) {
+  const pipeline::MeshEstimate estimate = pipeline::estimate_mesh<Dim>(scene);
+  const double memory = static_cast<double>(sysconf(_SC_PHYS_PAGES)) * static_cast<double>(sysconf(_SC_PAGE_SIZE));
+  const double limit = options.max_elements > 0 ? options.max_elements : memory / kBytesPerElement;
+  if (estimate.total() > limit) {
+    std::string field = "mesh.h";
+    if (estimate.background <= limit && estimate.largest_inclusion >= 0) {
+      const auto k = static_cast<std::size_t>(estimate.largest_inclusion);
+      field = scene.inclusions[k].levels == scene.levels ? "mesh.levels" : geometry::inclusion_field(k) + ".levels";
+    }
+    const std::string limit_text =
+        options.max_elements > 0 ? "the limit of " + about(limit)
+                                 : "the " + about(limit) + " this machine's " + about(memory / 1e9) + " GB of memory holds";
+    throw InputError(scene.source, field,
+                     "the mesh would have about " + about(estimate.total()) + " elements (about " +
+                         about(estimate.total() * kBytesPerElement / 1e9) + " GB), more than " + limit_text +
+                         " (--max-elements overrides)");
+  }
+  if (options.partitions > 0) {
+    double cells = 1;
+    for (std::size_t d = 0; d < Dim; ++d) cells *= std::round((scene.domain_max[d] - scene.domain_min[d]) / scene.h);
+    if (options.partitions > cells)
+      throw InputError(scene.source, "", "--partitions " + std::to_string(options.partitions) +
+                                             ": more partitions than the scene's " + std::to_string(static_cast<long long>(cells)) +
+                                             " coarse cells (domain / mesh.h)");
+  }
+}
+
+// A MeshingError says what the rules could not build; the scene's `mesh` settings (h,
+// levels) are what to change: name the file and them, keeping the error collective or not.
+[[noreturn]] void rethrow_with_scene(const MeshingError& e, const std::string& scene_path) {
+  const std::string what = InputError(scene_path, "mesh", e.what()).what();
+  if (const auto* collective = dynamic_cast<const parallel::CollectiveFailure*>(&e)) {
+    parallel::CollectiveMeshingError agreed(what);
+    agreed.failed_rank = collective->failed_rank;
+    throw agreed;
+  }
+  throw MeshingError(what);
 }
 
 // Area (2D) or volume (3D) of cell c.
@@ -111,18 +164,23 @@ std::variant<MeshRun<2>, MeshRun<3>> mesh_scene(const Comm& comm, const std::str
     run.ranks = comm.size();
     run.start = start;
     run.bound = options.bound > 0 ? options.bound : Dim == 2 ? 3.0 : 5.0;
-    if (distributed) {
-      tell(comm, options, "meshing on " + std::to_string(comm.size()) + " rank(s)");
-      parallel::MeshOptions o{.pipeline = options.pipeline,
-                              .partitions = options.partitions > 0 ? options.partitions : comm.size(),
-                              .partitioning = {},
-                              .ghost = options.ghost};
-      run.mesh = parallel::mesh_distributed<Dim>(comm, std::move(scene), o);
-      run.mesh.times.add("read", read_seconds);
-      const std::int64_t files = run.mesh.stl_files_read;
-      run.stl_files_read = {-comm.allreduce_max(-files), comm.allreduce_max(files), comm.allreduce_sum(files)};
-    } else {
-      mesh_sequential<Dim>(comm, scene, run);
+    parallel::run_collectively(comm, [&] { check_request<Dim>(scene, options); });
+    try {
+      if (distributed) {
+        tell(comm, options, "meshing on " + std::to_string(comm.size()) + " rank(s)");
+        parallel::MeshOptions o{.pipeline = options.pipeline,
+                                .partitions = options.partitions > 0 ? options.partitions : comm.size(),
+                                .partitioning = {},
+                                .ghost = options.ghost};
+        run.mesh = parallel::mesh_distributed<Dim>(comm, std::move(scene), o);
+        run.mesh.times.add("read", read_seconds);
+        const std::int64_t files = run.mesh.stl_files_read;
+        run.stl_files_read = {-comm.allreduce_max(-files), comm.allreduce_max(files), comm.allreduce_sum(files)};
+      } else {
+        mesh_sequential<Dim>(comm, scene, run);
+      }
+    } catch (const MeshingError& e) {
+      rethrow_with_scene(e, scene_path);
     }
     take_figures(comm, run);
     return run;

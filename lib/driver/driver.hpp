@@ -26,8 +26,16 @@ struct Options {
   parallel::GhostRule ghost;
   double bound = 0;     // aspect-ratio bound of the statistics (0: 3 in 2D, 5 in 3D)
   bool figures = true;  // per-phase counts and measures, checksum (a pass and a sort over the cells)
+  // A scene whose mesh pipeline::estimate_mesh puts above this many elements is refused
+  // before any work (InputError naming mesh.h or the levels). 0: as many as this machine's
+  // memory holds at kBytesPerElement each.
+  double max_elements = 0;
   std::function<void(const std::string&)> progress;  // told on rank 0 when a stage begins
 };
+
+// Peak memory of a run per element, measured on the examples (about 90 bytes in 2D, 130
+// in 3D), with a margin.
+inline constexpr double kBytesPerElement = 160;
 
 // Whether `options` ask for the parallel mesher on `comm`.
 bool is_distributed(const Comm& comm, const Options& options);
@@ -63,7 +71,9 @@ struct MeshRun {
 
 // Reads the scene (every rank parses it; STL files as lib/parallel's README says), meshes
 // it, and takes the aspect-ratio statistics, and with Options::figures the per-phase
-// figures and the checksum. Errors are thrown on every rank alike.
+// figures and the checksum. Before meshing it refuses a scene above Options::max_elements
+// and more partitions than the scene has coarse cells (InputError); a MeshingError names the
+// scene file and its `mesh` settings. Errors are thrown on every rank alike.
 std::variant<MeshRun<2>, MeshRun<3>> mesh_scene(const Comm& comm, const std::string& scene_path,
                                                  const Options& options);
 

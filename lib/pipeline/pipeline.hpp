@@ -59,6 +59,20 @@ struct Result {
 template <int Dim>
 grid::Lattice<Dim> make_lattice(const geometry::SceneDesc& scene, const Options& options);
 
+// A rough count of the elements a scene's mesh will have, before any memory is taken: the
+// background cells, and per inclusion a band along its interface at its requested level
+// (the interface's size taken from its box clipped to the domain; an STL surface whose
+// triangles are not loaded is left out). An estimate for refusing requests beyond the
+// machine, not a bound: rule R2 may refine further, empty boxes less.
+struct MeshEstimate {
+  double background = 0;  // elements of the unrefined lattice
+  double refined = 0;     // elements the inclusions' refinement adds
+  std::int64_t largest_inclusion = -1;  // the inclusion adding the most (-1: none)
+  double total() const { return background + refined; }
+};
+template <int Dim>
+MeshEstimate estimate_mesh(const geometry::SceneDesc& scene);
+
 // Meshes the coarse cells of `box` (global coarse indices), using `ghost` extra coarse
 // cells on each side (clipped to the domain) so that decisions inside the box are those
 // of the whole-domain run. Cells of void phases are dropped; unused nodes removed.
