@@ -114,21 +114,33 @@ void add_mesh_command(CLI::App& app, GlobalFlags& flags, int& exit_code) {
   cmd->add_option("-o,--output", args->output,
                   "Output mesh: .vtu, .msh (Gmsh 4.1), .inp (Abaqus) or .mesh (Medit); in parallel also .pvtu "
                   "(one .vtu piece per rank)")
-      ->required();
+      ->required()
+      ->check(output_path());
   cmd->add_option("--format", args->format, "Mesh format when -o does not name one (-o - writes standard output)")
       ->check(CLI::IsMember({"vtu", "msh", "inp", "mesh"}));
-  cmd->add_option("--report", args->report, "Write a JSON report (counts, per-phase measure, aspect ratios, timings)");
-  cmd->add_option("--svg", args->svg, "Write a picture of the 2D mesh coloured by phase");
+  cmd->add_option("--report", args->report, "Write a JSON report (counts, per-phase measure, aspect ratios, timings)")
+      ->check(output_path());
+  cmd->add_option("--svg", args->svg,
+                  "Write a picture of the mesh coloured by phase (3D: the slice through the domain centre, "
+                  "--svg-axis and --svg-at)")
+      ->check(output_path());
   cmd->add_option("--alpha", knobs.alpha, "r-adaptivity snap threshold, fraction of the edge length")
-      ->check(CLI::Range(0.05, 0.5));
+      ->check(number_in(0.05, 0.5))
+      ->capture_default_str();
   cmd->add_option("--extra-levels", knobs.extra_levels,
                   "Levels beyond the largest requested one that may separate close interfaces")
-      ->check(CLI::Range(0, 10));
-  cmd->add_option("--bound", args->options.bound, "Aspect-ratio bound for the exit status (default 3 in 2D, 5 in 3D)");
+      ->check(number_in(0, 10, true))
+      ->capture_default_str();
+  cmd->add_option("--bound", args->options.bound, "Aspect-ratio bound for the exit status (default 3 in 2D, 5 in 3D)")
+      ->check(number_in(1, 1e6));
   cmd->add_option("--partitions", args->options.partitions,
                   "Mesh N load-balanced partitions with the parallel mesher (N >= MPI ranks; default under "
                   "mpiexec: one per rank)")
-      ->check(CLI::Range(1, 1 << 20));
+      ->check(number_in(1, 1 << 20, true));
+  cmd->add_option("--max-elements", args->options.max_elements,
+                  "Refuse a scene whose estimated mesh has more elements than this (default: what this "
+                  "machine's memory holds, at 160 bytes per element)")
+      ->check(number_in(1, 1e15));
   cmd->add_flag("--gather", args->gather,
                 "Parallel run: write one file on rank 0 (any format) instead of .pvtu pieces");
   cmd->add_flag("--fixed-ghost", args->fixed_ghost,
@@ -140,7 +152,7 @@ void add_mesh_command(CLI::App& app, GlobalFlags& flags, int& exit_code) {
   cmd->add_option("--ghost-cubes", ghost.margin3_cubes,
                   "Comparison (3D): a ghost of this many coarse cubes instead of the one derived from the "
                   "kernel's reach (lib/parallel/README.md); too few break partition invariance")
-      ->check(CLI::Range(0.0, 1e6))
+      ->check(number_in(0, 1e6))
       ->group("");
   cmd->callback([args, &flags, &exit_code] { run_mesh(*args, flags, exit_code); });
 }
