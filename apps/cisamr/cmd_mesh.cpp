@@ -7,7 +7,10 @@
 #include <string>
 #include <variant>
 
+#include <unistd.h>
+
 #include "commands.hpp"
+#include "progress_line.hpp"
 #include "driver/driver.hpp"
 #include "io/atomic_file.hpp"
 #include "parallel/collective.hpp"
@@ -80,7 +83,13 @@ void run_mesh(MeshArgs& args, const GlobalFlags& flags, int& exit_code) {
   driver::Options& options = args.options;
   options.ghost.level_aware = !args.fixed_ghost;
   options.figures = !args.report.empty();
-  if (show_progress(flags)) options.progress = [](const std::string& what) { std::fprintf(stderr, "cisamr: %s\n", what.c_str()); };
+  // Progress on rank 0: the phases of this rank, which meshes its share like the others.
+  std::unique_ptr<ProgressLine> progress;
+  if (!flags.quiet && comm.rank() == 0)
+    progress = std::make_unique<ProgressLine>(
+        isatty(STDERR_FILENO) ? ProgressLine::Mode::terminal : ProgressLine::Mode::log, ProgressLine::to_stderr(),
+        flags.progress_interval);
+  options.progress = progress.get();
   // Fail on a bad output name before any work.
   const driver::Output output =
       driver::plan_output(comm, args.output, args.gather, driver::is_distributed(comm, options), args.format);
@@ -97,6 +106,7 @@ void run_mesh(MeshArgs& args, const GlobalFlags& flags, int& exit_code) {
         parallel::run_collectively(comm, [&] { outputs.commit(); });
         // Data on standard output: the summary goes to stderr.
         const bool data_on_stdout = io::is_standard_output(args.report) || io::is_standard_output(output.path);
+        if (progress) progress->finish();
         if (comm.rank() == 0) print_summary(data_on_stdout ? stderr : stdout, run, output, flags);
         exit_code = run.aspect.above_bound > 0 ? 3 : 0;
       },

@@ -13,6 +13,7 @@ namespace cisamr::app {
 struct GlobalFlags {
   bool quiet = false;    // no progress output
   bool verbose = false;  // phase timings
+  double progress_interval = 5;  // seconds between progress lines when stderr is not a terminal
 };
 
 void add_mesh_command(CLI::App& app, GlobalFlags& flags, int& exit_code);

@@ -88,6 +88,10 @@ int main(int argc, char** argv) {
   for (CLI::App* sub : app.get_subcommands({})) {
     sub->add_flag("-q,--quiet", flags.quiet, "No progress output");
     sub->add_flag("-v,--verbose", flags.verbose, "Print phase timings");
+    sub->add_option("--progress-interval", flags.progress_interval,
+                    "Seconds between progress lines when stderr is not a terminal (a log, mpiexec; 0: every phase)")
+        ->check(app::number_in(0, 86400))
+        ->capture_default_str();
     sub->set_version_flag("--version", kVersion);
   }
   // `cisamr`, `cisamr help [COMMAND]` and an unknown command: what exists, before CLI11,

@@ -22,8 +22,10 @@
 namespace cisamr::driver {
 namespace {
 
+// Phases without a timer of their own (the timed ones tell Options::progress through
+// PhaseTimes::progress, set on rank 0 only).
 void tell(const Comm& comm, const Options& options, const std::string& what) {
-  if (options.progress && comm.rank() == 0) options.progress(what);
+  if (comm.rank() == 0) begin_phase(options.progress, what);
 }
 
 std::string about(double value) {
@@ -89,11 +91,8 @@ double cell_measure(const mesh::SimplexMesh<Dim>& m, std::size_t c) {
 template <int Dim>
 void mesh_sequential(const Comm& comm, const geometry::SceneDesc& scene, MeshRun<Dim>& run) {
   using Oracle = geometry::Oracle<Dim>;
-  tell(comm, run.options, "building the geometry oracle");
+  tell(comm, run.options, "oracle");
   const Oracle oracle(scene);
-  tell(comm, run.options,
-       Dim == 2 ? "meshing (SAMR, r-adaptivity, subdivision)"
-                : "meshing (SAMR, r-adaptivity with the quality guard, face swapping, subdivision)");
   pipeline::Result<Dim> result = pipeline::mesh(oracle, run.options.pipeline);
   parallel::DistributedMesh<Dim>& m = run.mesh;
   m.piece.mesh = std::move(result.mesh);
@@ -149,7 +148,7 @@ std::variant<MeshRun<2>, MeshRun<3>> mesh_scene(const Comm& comm, const std::str
                                                  const Options& options) {
   const auto start = std::chrono::steady_clock::now();
   const bool distributed = is_distributed(comm, options);
-  tell(comm, options, "reading the scene");
+  tell(comm, options, "read");
   geometry::SceneDesc scene;
   if (distributed)  // every rank reads the descriptors; STL triangles later, where needed
     parallel::run_collectively(comm, [&] {
@@ -160,6 +159,8 @@ std::variant<MeshRun<2>, MeshRun<3>> mesh_scene(const Comm& comm, const std::str
   const double read_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const auto mesh = [&]<int Dim>(MeshRun<Dim> run) -> std::variant<MeshRun<2>, MeshRun<3>> {
     run.options = options;
+    run.options.pipeline.progress = comm.rank() == 0 ? options.progress : nullptr;
+    run.mesh.times.progress = run.options.pipeline.progress;
     run.distributed = distributed;
     run.ranks = comm.size();
     run.start = start;
@@ -167,8 +168,7 @@ std::variant<MeshRun<2>, MeshRun<3>> mesh_scene(const Comm& comm, const std::str
     parallel::run_collectively(comm, [&] { check_request<Dim>(scene, options); });
     try {
       if (distributed) {
-        tell(comm, options, "meshing on " + std::to_string(comm.size()) + " rank(s)");
-        parallel::MeshOptions o{.pipeline = options.pipeline,
+        parallel::MeshOptions o{.pipeline = run.options.pipeline,
                                 .partitions = options.partitions > 0 ? options.partitions : comm.size(),
                                 .partitioning = {},
                                 .ghost = options.ghost};
@@ -212,7 +212,6 @@ Output plan_output(const Comm& comm, const std::string& requested, bool gather, 
 
 template <int Dim>
 void write_outputs(const Comm& comm, MeshRun<Dim>& run, const Output& output, const std::string& svg) {
-  tell(comm, run.options, "writing the mesh");
   ScopedPhase timer(&run.mesh.times, "write");
   const parallel::NumberedPiece<Dim>& piece = run.mesh.piece;
   const bool picture = Dim == 2 && !svg.empty();

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "core/comm.hpp"
+#include "core/progress.hpp"
 #include "parallel/distributed.hpp"
 #include "parallel/output.hpp"
 #include "quality/quality.hpp"
@@ -30,7 +31,7 @@ struct Options {
   // before any work (InputError naming mesh.h or the levels). 0: as many as this machine's
   // memory holds at kBytesPerElement each.
   double max_elements = 0;
-  std::function<void(const std::string&)> progress;  // told on rank 0 when a stage begins
+  Progress* progress = nullptr;  // told on rank 0 of every phase (read, oracle, levels, samr, ..., write)
 };
 
 // Peak memory of a run per element, measured on the examples (about 90 bytes in 2D, 130

@@ -119,6 +119,7 @@ template <int Dim>
 Result<Dim> run(const geometry::Oracle<Dim>& oracle, const grid::Lattice<Dim>& lattice, const grid::CellRange<Dim>& box,
                 int ghost, const Options& options, int partition_id, std::span<const int> levels) {
   Result<Dim> result;
+  result.times.progress = options.progress;
   MeshParts<Dim> parts = run_stages(oracle, lattice, box, ghost, options, levels, result);
   {
     ScopedPhase timer(&result.times, "assemble");
@@ -129,12 +130,14 @@ Result<Dim> run(const geometry::Oracle<Dim>& oracle, const grid::Lattice<Dim>& l
 
 Result<2> mesh(const geometry::Oracle2& oracle, const Options& options) {
   const grid::Lattice2 lattice = make_lattice<2>(oracle.scene(), options);
+  begin_phase(options.progress, "levels");
   const std::vector<int> levels = effective_levels2(oracle.scene(), lattice);
   return run(oracle, lattice, lattice.whole_domain(), 0, options, 0, levels);
 }
 
 Result<3> mesh(const geometry::Oracle3& oracle, const Options& options) {
   const grid::Lattice3 lattice = make_lattice<3>(oracle.scene(), options);
+  begin_phase(options.progress, "levels");
   const std::vector<int> levels =
       effective_levels3(oracle.scene(), lattice, {}, surface_unions(oracle.scene()));
   return run(oracle, lattice, lattice.whole_domain(), 0, options, 0, levels);

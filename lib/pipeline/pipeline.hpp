@@ -11,6 +11,7 @@
 #include <type_traits>
 #include <vector>
 
+#include "core/progress.hpp"
 #include "core/timer.hpp"
 #include "geometry/oracle.hpp"
 #include "geometry/scene.hpp"
@@ -29,6 +30,7 @@ struct Options {
   int max_candidates3 = 2;  // snap candidates per node the 3D guard considers
   double bound3 = 5.0;
   double swap_trigger3 = 3.0;  // corner tets above this aspect ratio look for a face swap (0: none)
+  Progress* progress = nullptr;  // told of the stages (levels, samr, radapt, ...) as they begin
 };
 
 // What identifies an output node across partitions. 2D: its lattice key (grid::key2).
