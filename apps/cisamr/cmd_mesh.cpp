@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <memory>
+#include <optional>
 #include <string>
 #include <variant>
 
@@ -21,6 +22,8 @@ namespace {
 
 struct MeshArgs {
   std::string scene, output, report, svg, format;
+  std::string svg_axis = "z";
+  std::optional<double> svg_at;
   bool gather = false;
   bool fixed_ghost = false;  // the fixed 3-cell inclusion margin instead of the level-aware one
   driver::Options options;
@@ -83,13 +86,19 @@ void run_mesh(MeshArgs& args, const GlobalFlags& flags, int& exit_code) {
   driver::Options& options = args.options;
   options.ghost.level_aware = !args.fixed_ghost;
   options.figures = !args.report.empty();
-  // Progress on rank 0: the phases of this rank, which meshes its share like the others.
+  options.svg_slice = {.axis = args.svg_axis[0] - 'x', .at = args.svg_at};
+  // Progress: drawn on rank 0, for the slowest rank (flags are alike on every rank, so every
+  // rank creates the RankProgress, collectively, or none does).
   std::unique_ptr<ProgressLine> progress;
-  if (!flags.quiet && comm.rank() == 0)
-    progress = std::make_unique<ProgressLine>(
-        isatty(STDERR_FILENO) ? ProgressLine::Mode::terminal : ProgressLine::Mode::log, ProgressLine::to_stderr(),
-        flags.progress_interval);
-  options.progress = progress.get();
+  std::unique_ptr<parallel::RankProgress> ranks;
+  if (!flags.quiet) {
+    if (comm.rank() == 0)
+      progress = std::make_unique<ProgressLine>(
+          isatty(STDERR_FILENO) ? ProgressLine::Mode::terminal : ProgressLine::Mode::log, ProgressLine::to_stderr(),
+          flags.progress_interval);
+    ranks = std::make_unique<parallel::RankProgress>(comm, progress.get());
+  }
+  options.progress = ranks.get();
   // Fail on a bad output name before any work.
   const driver::Output output =
       driver::plan_output(comm, args.output, args.gather, driver::is_distributed(comm, options), args.format);
@@ -134,6 +143,12 @@ void add_mesh_command(CLI::App& app, GlobalFlags& flags, int& exit_code) {
                   "Write a picture of the mesh coloured by phase (3D: the slice through the domain centre, "
                   "--svg-axis and --svg-at)")
       ->check(output_path());
+  cmd->add_option("--svg-axis", args->svg_axis, "3D picture: the axis the slice plane is normal to")
+      ->check(CLI::IsMember({"x", "y", "z"}))
+      ->capture_default_str();
+  cmd->add_option("--svg-at", args->svg_at,
+                  "3D picture: the slice plane's coordinate along --svg-axis (default: the domain centre)")
+      ->check(number_in(-1e30, 1e30));
   cmd->add_option("--alpha", knobs.alpha, "r-adaptivity snap threshold, fraction of the edge length")
       ->check(number_in(0.05, 0.5))
       ->capture_default_str();

@@ -27,7 +27,7 @@ bool show_progress(const GlobalFlags& flags);
 
 // Checks of option values (options.cpp). CLI11 prefixes the option's name: "--bound: must
 // be a number in [1, 1e+06] (got nan)". `number_in`: a finite number in [lo, hi], a whole
-// one where `whole`; `output_path`: not empty.
+// one where `whole`; `output_path`: not empty ("--output: an empty path: ...").
 CLI::Validator number_in(double lo, double hi, bool whole = false);
 CLI::Validator output_path();
 

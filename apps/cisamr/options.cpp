@@ -41,7 +41,7 @@ CLI::Validator number_in(double lo, double hi, bool whole) {
 }
 
 CLI::Validator output_path() {
-  return CLI::Validator([](std::string& text) { return text.empty() ? std::string("must name a file (or - for standard output)") : std::string(); },
+  return CLI::Validator([](std::string& text) { return text.empty() ? std::string("an empty path: name a file (or - for standard output)") : std::string(); },
                         "");
 }
 

@@ -23,10 +23,8 @@ namespace cisamr::driver {
 namespace {
 
 // Phases without a timer of their own (the timed ones tell Options::progress through
-// PhaseTimes::progress, set on rank 0 only).
-void tell(const Comm& comm, const Options& options, const std::string& what) {
-  if (comm.rank() == 0) begin_phase(options.progress, what);
-}
+// PhaseTimes::progress).
+void tell(const Options& options, const std::string& what) { begin_phase(options.progress, what); }
 
 std::string about(double value) {
   char text[32];
@@ -91,7 +89,7 @@ double cell_measure(const mesh::SimplexMesh<Dim>& m, std::size_t c) {
 template <int Dim>
 void mesh_sequential(const Comm& comm, const geometry::SceneDesc& scene, MeshRun<Dim>& run) {
   using Oracle = geometry::Oracle<Dim>;
-  tell(comm, run.options, "oracle");
+  tell(run.options, "oracle");
   const Oracle oracle(scene);
   pipeline::Result<Dim> result = pipeline::mesh(oracle, run.options.pipeline);
   parallel::DistributedMesh<Dim>& m = run.mesh;
@@ -148,7 +146,7 @@ std::variant<MeshRun<2>, MeshRun<3>> mesh_scene(const Comm& comm, const std::str
                                                  const Options& options) {
   const auto start = std::chrono::steady_clock::now();
   const bool distributed = is_distributed(comm, options);
-  tell(comm, options, "read");
+  tell(options, "read");
   geometry::SceneDesc scene;
   if (distributed)  // every rank reads the descriptors; STL triangles later, where needed
     parallel::run_collectively(comm, [&] {
@@ -159,7 +157,7 @@ std::variant<MeshRun<2>, MeshRun<3>> mesh_scene(const Comm& comm, const std::str
   const double read_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const auto mesh = [&]<int Dim>(MeshRun<Dim> run) -> std::variant<MeshRun<2>, MeshRun<3>> {
     run.options = options;
-    run.options.pipeline.progress = comm.rank() == 0 ? options.progress : nullptr;
+    run.options.pipeline.progress = options.progress;
     run.mesh.times.progress = run.options.pipeline.progress;
     run.distributed = distributed;
     run.ranks = comm.size();
@@ -214,7 +212,7 @@ template <int Dim>
 void write_outputs(const Comm& comm, MeshRun<Dim>& run, const Output& output, const std::string& svg) {
   ScopedPhase timer(&run.mesh.times, "write");
   const parallel::NumberedPiece<Dim>& piece = run.mesh.piece;
-  const bool picture = Dim == 2 && !svg.empty();
+  const bool picture = !svg.empty();
   // On one rank the piece is the whole mesh (nodes in global-id order).
   mesh::SimplexMesh<Dim> gathered_copy;
   if ((!output.pieces || picture) && comm.size() > 1) gathered_copy = parallel::gather_mesh<Dim>(comm, piece);
@@ -223,16 +221,17 @@ void write_outputs(const Comm& comm, MeshRun<Dim>& run, const Output& output, co
     parallel::write_pvtu<Dim>(comm, output.path, piece.mesh);
   else
     parallel::write_gathered<Dim>(comm, output.path, gathered, run.mesh.phases, {.format = output.format});
-  if constexpr (Dim == 2)
-    if (picture)
-      parallel::run_collectively(comm, [&] {
-        if (comm.rank() != 0) return;
-        geometry::SceneDesc header;  // what the picture needs: phases and domain
-        header.phases = run.mesh.phases;
-        header.domain_min = {run.mesh.domain.min[0], run.mesh.domain.min[1], 0};
-        header.domain_max = {run.mesh.domain.max[0], run.mesh.domain.max[1], 0};
+  if (picture)
+    parallel::run_collectively(comm, [&] {
+      if (comm.rank() != 0) return;
+      geometry::SceneDesc header;  // what the picture needs: phases and domain
+      header.phases = run.mesh.phases;
+      for (int d = 0; d < Dim; ++d) header.domain_min[d] = run.mesh.domain.min[d], header.domain_max[d] = run.mesh.domain.max[d];
+      if constexpr (Dim == 2)
         io::write_mesh_svg(svg, gathered, header);
-      });
+      else
+        io::write_mesh_svg(svg, gathered, header, run.options.svg_slice);
+    });
 }
 
 template <int Dim>

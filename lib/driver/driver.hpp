@@ -13,6 +13,7 @@
 
 #include "core/comm.hpp"
 #include "core/progress.hpp"
+#include "io/mesh_svg.hpp"
 #include "parallel/distributed.hpp"
 #include "parallel/output.hpp"
 #include "quality/quality.hpp"
@@ -31,7 +32,10 @@ struct Options {
   // before any work (InputError naming mesh.h or the levels). 0: as many as this machine's
   // memory holds at kBytesPerElement each.
   double max_elements = 0;
-  Progress* progress = nullptr;  // told on rank 0 of every phase (read, oracle, levels, samr, ..., write)
+  io::SlicePlane svg_slice;  // the plane of a 3D mesh's picture (write_outputs)
+  // Told of every phase (read, oracle, levels, samr, ..., write) on every rank: in a parallel
+  // run a parallel::RankProgress, which reports the slowest rank on rank 0.
+  Progress* progress = nullptr;
 };
 
 // Peak memory of a run per element, measured on the examples (about 90 bytes in 2D, 130
@@ -93,8 +97,8 @@ struct Output {
 Output plan_output(const Comm& comm, const std::string& requested, bool gather, bool distributed,
                    const std::string& format = "");
 
-// Writes the mesh where `output` says and, in 2D with `svg` given, a picture of it (timed
-// as "write").
+// Writes the mesh where `output` says and, with `svg` given, a picture of it (3D: the slice
+// by Options::svg_slice) (timed as "write").
 template <int Dim>
 void write_outputs(const Comm& comm, MeshRun<Dim>& run, const Output& output, const std::string& svg);
 

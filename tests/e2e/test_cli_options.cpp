@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <string>
 
 namespace {
@@ -205,6 +206,23 @@ TEST_F(CliOptions, RequestsBeyondMemoryAreRefusedUpFrontWithAnEstimate) {
   EXPECT_NE(low.output.find("the limit of 50"), std::string::npos) << low.output;
   const CommandResult high = run("mesh " + s + " -o " + out() + " --max-elements 1e6");
   EXPECT_EQ(high.exit_code, 0) << high.output;
+}
+
+TEST_F(CliOptions, SvgOfA3DSceneIsASliceOrAnErrorNamingThePlane) {
+  const std::string s = write("sphere.json", scene(3, "1", "0.1", 1));
+  const std::string svg = (dir / "slice.svg").string();
+  const CommandResult ok = run("mesh " + s + " -o " + out() + " --svg " + svg + " --svg-axis y --svg-at 0.4");
+  EXPECT_EQ(ok.exit_code, 0) << ok.output;
+  std::ifstream in(svg);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("<path fill=\"#e6550d\""), std::string::npos);  // the sphere's phase
+  fs::remove(svg);
+  fs::remove(out());
+  const CommandResult outside = run("mesh " + s + " -o " + out() + " --svg " + svg + " --svg-at 2");
+  EXPECT_EQ(outside.exit_code, 2) << outside.output;
+  EXPECT_NE(outside.output.find("--svg-at"), std::string::npos) << outside.output;
+  EXPECT_FALSE(out_exists());
+  EXPECT_FALSE(fs::exists(svg));
 }
 
 TEST_F(CliOptions, MeshingErrorsNameTheSceneFile) {
