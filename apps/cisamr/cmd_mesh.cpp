@@ -96,6 +96,7 @@ void run_mesh(MeshArgs& args, const GlobalFlags& flags, int& exit_code) {
       progress = std::make_unique<ProgressLine>(
           isatty(STDERR_FILENO) ? ProgressLine::Mode::terminal : ProgressLine::Mode::log, ProgressLine::to_stderr(),
           flags.progress_interval);
+    if (progress) progress->start_ticker();
     ranks = std::make_unique<parallel::RankProgress>(comm, progress.get());
   }
   options.progress = ranks.get();

@@ -55,7 +55,26 @@ void ProgressLine::show(double now, bool forced) {
   last_shown_ = now;
 }
 
+ProgressLine::~ProgressLine() { finish(); }
+
+void ProgressLine::start_ticker() {
+  ticker_ = std::thread([this] {
+    std::unique_lock lock(mutex_);
+    while (!stop_signal_.wait_for(lock, std::chrono::milliseconds(100), [this] { return stopping_; })) {
+      lock.unlock();
+      tick();
+      lock.lock();
+    }
+  });
+}
+
+void ProgressLine::tick() {
+  const std::lock_guard lock(mutex_);
+  if (!phase_.empty() && !stopping_) show(clock_(), false);
+}
+
 void ProgressLine::phase(const std::string& name) {
+  const std::lock_guard lock(mutex_);
   const double now = clock_();
   if (mode_ == Mode::terminal && line_open_) {
     show(now, true);  // the finished phase's final figures
@@ -69,12 +88,20 @@ void ProgressLine::phase(const std::string& name) {
 }
 
 void ProgressLine::advance(std::int64_t done, std::int64_t total) {
+  const std::lock_guard lock(mutex_);
   done_ = done;
   total_ = total;
   show(clock_(), false);
 }
 
 void ProgressLine::finish() {
+  {
+    const std::lock_guard lock(mutex_);
+    stopping_ = true;
+  }
+  stop_signal_.notify_all();
+  if (ticker_.joinable()) ticker_.join();
+  const std::lock_guard lock(mutex_);
   if (mode_ == Mode::terminal && line_open_) {
     show(clock_(), true);
     write_("\n");

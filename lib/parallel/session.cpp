@@ -6,6 +6,7 @@
 #include <climits>
 #include <cstdlib>
 #include <cstring>
+#include <exception>
 #include <functional>
 #include <memory>
 #include <stdexcept>
@@ -164,6 +165,7 @@ struct RankProgress::Impl {
     bool finished = false;
   };
   State own;
+  int uncaught = 0;  // std::uncaught_exceptions() at construction
 #ifdef CISAMR_HAVE_MPI
   static constexpr int kTag = 1;
   struct Message {
@@ -252,6 +254,7 @@ RankProgress::RankProgress(const Comm& comm, Progress* renderer) : impl_(std::ma
   impl_->renderer = renderer;
   impl_->rank = comm.rank();
   impl_->size = comm.size();
+  impl_->uncaught = std::uncaught_exceptions();
 #ifdef CISAMR_HAVE_MPI
   if (impl_->size > 1) {
     MPI_Comm_dup(MPI_COMM_WORLD, &impl_->channel);
@@ -269,8 +272,14 @@ RankProgress::~RankProgress() {
 #ifdef CISAMR_HAVE_MPI
   Impl& p = *impl_;
   if (p.size > 1) {
-    // Every rank's last message is received before the channel goes: nothing stays in flight.
     g_while_waiting = nullptr;
+    if (std::uncaught_exceptions() > p.uncaught) {
+      // Unwinding: the error may be this rank's alone (the job is about to be aborted), so
+      // wait for nobody. What is in flight is a few bytes, sent eagerly.
+      if (p.pending != MPI_REQUEST_NULL) MPI_Request_free(&p.pending);
+      return;
+    }
+    // Every rank's last message is received before the channel goes: nothing stays in flight.
     if (p.rank == 0) {
       for (int r = 1; r < p.size; ++r)
         while (!p.states[static_cast<std::size_t>(r)].finished) p.receive(true);

@@ -45,7 +45,8 @@ class MpiSession {
 // a reduction for the others, every few milliseconds (the reduction is polled), and tells
 // `renderer` the slowest rank's state. At the end (the destructor, on every rank) each rank
 // sends a last message and rank 0 receives all of them, so nothing is left in flight at
-// MPI_Finalize. Messages never touch the mesh. On one process, `renderer` is told directly.
+// MPI_Finalize; a destructor run by an exception waits for nobody (the error may be this
+// rank's alone, about to abort the job). Messages never touch the mesh. On one process, `renderer` is told directly.
 class RankProgress final : public Progress {
  public:
   RankProgress(const Comm& comm, Progress* renderer);  // renderer: rank 0's, nullptr elsewhere
