@@ -121,23 +121,16 @@ void add_certify_command(CLI::App& app, GlobalFlags& flags, int& exit_code) {
   cmd->add_option("--phase-map", args->phase_map,
                   "With --scene: mesh phases to scene phases, MESH=SCENE,... (ids or names; default: by the names "
                   "the file gives, else by id)");
-  cmd->add_option("--html", args->html, "Write the certificate as a self-contained HTML page");
-  cmd->add_option("--json", args->json, "Write the certificate as JSON");
-  const CLI::Validator at_least_one(
-      [](std::string& text) {
-        try {
-          if (std::stod(text) >= 1) return std::string();
-        } catch (const std::exception&) {
-        }
-        return std::string("must be a number >= 1 (1 is the aspect ratio of the regular simplex)");
-      },
-      "X>=1");
-  cmd->add_option("--bound", args->bound, "Aspect-ratio bound (default 3 in 2D, 5 in 3D)")->check(at_least_one);
+  cmd->add_option("--html", args->html, "Write the certificate as a self-contained HTML page")->check(output_path());
+  cmd->add_option("--json", args->json, "Write the certificate as JSON")->check(output_path());
+  cmd->add_option("--bound", args->bound,
+                  "Aspect-ratio bound, at least 1, the regular simplex's (default 3 in 2D, 5 in 3D)")
+      ->check(number_in(1, 1e6));
   cmd->add_option("--fidelity-tolerance", args->fidelity_tolerance,
                   "Distance a node may lie from the phases it serves (default 1e-9 of the domain diagonal; "
                   "`cisamr mesh --report` gives the largest collapse deviation of sub-resolution features; "
                   "in 3D also the least distance a centroid may lie from its cell's phase)")
-      ->check(CLI::PositiveNumber);
+      ->check(number_in(1e-300, 1e300));
   cmd->callback([args, &flags, &exit_code] {
     PhaseTimes times;
     progress(flags, "reading the mesh");

@@ -35,16 +35,17 @@ void add_compare_command(CLI::App& app, GlobalFlags& flags, int& exit_code) {
       "compare", "Mesh a 3D scene with cisamr and with a reference mesher (TetGen) and compare them side by side");
   cmd->add_option("scene", args->scene, "Scene file (cisamr-scene/1, 3D: spheres and ellipsoids)")->required();
   cmd->add_flag("--tetgen", args->tetgen, "Compare with TetGen 1.5 (-pq1.4a...A)")->required();
-  cmd->add_option("--html", args->html, "Write the comparison as a self-contained HTML page");
-  cmd->add_option("--json", args->json, "Write the comparison as JSON (cisamr-compare/1)");
+  cmd->add_option("--html", args->html, "Write the comparison as a self-contained HTML page")->check(output_path());
+  cmd->add_option("--json", args->json, "Write the comparison as JSON (cisamr-compare/1)")->check(output_path());
   cmd->add_option("--tetgen-max-volume", args->max_volume,
                   "TetGen's -a bound (default: chosen by two pilot runs to match our tetrahedron count)")
-      ->check(CLI::PositiveNumber);
-  cmd->add_option("--tetgen-quality", args->quality, "TetGen's -q radius-edge bound (default 1.4)")
-      ->check(CLI::Range(1.0, 100.0));
+      ->check(number_in(1e-300, 1e300));
+  cmd->add_option("--tetgen-quality", args->quality, "TetGen's -q radius-edge bound")
+      ->check(number_in(1, 100))
+      ->capture_default_str();
   cmd->add_option("--surface-edge", args->surface_edge,
                   "Edge length of TetGen's inclusion surfaces (default h / 2^levels, our interface size)")
-      ->check(CLI::PositiveNumber);
+      ->check(number_in(1e-300, 1e300));
   cmd->add_flag("--in-process", args->in_process,
                 "Run both meshers in this process (default: each in a child process, for clean memory figures)");
   cmd->add_flag("--no-conformity", args->no_conformity, "Skip the conformity check of both meshes");

@@ -4,10 +4,14 @@
 #include <algorithm>
 #include <cstdio>
 #include <memory>
+#include <optional>
 #include <string>
 #include <variant>
 
+#include <unistd.h>
+
 #include "commands.hpp"
+#include "progress_line.hpp"
 #include "driver/driver.hpp"
 #include "io/atomic_file.hpp"
 #include "parallel/collective.hpp"
@@ -19,6 +23,8 @@ namespace {
 struct MeshArgs {
   std::string scene, output, report, svg, format;
   std::string plane = "stress";  // 2D Abaqus elements: CPS3 (stress) or CPE3 (strain)
+  std::string svg_axis = "z";
+  std::optional<double> svg_at;
   bool gather = false;
   bool fixed_ghost = false;  // the fixed 3-cell inclusion margin instead of the level-aware one
   driver::Options options;
@@ -81,7 +87,20 @@ void run_mesh(MeshArgs& args, const GlobalFlags& flags, int& exit_code) {
   driver::Options& options = args.options;
   options.ghost.level_aware = !args.fixed_ghost;
   options.figures = !args.report.empty();
-  if (show_progress(flags)) options.progress = [](const std::string& what) { std::fprintf(stderr, "cisamr: %s\n", what.c_str()); };
+  options.svg_slice = {.axis = args.svg_axis[0] - 'x', .at = args.svg_at};
+  // Progress: drawn on rank 0, for the slowest rank (flags are alike on every rank, so every
+  // rank creates the RankProgress, collectively, or none does).
+  std::unique_ptr<ProgressLine> progress;
+  std::unique_ptr<parallel::RankProgress> ranks;
+  if (!flags.quiet) {
+    if (comm.rank() == 0)
+      progress = std::make_unique<ProgressLine>(
+          isatty(STDERR_FILENO) ? ProgressLine::Mode::terminal : ProgressLine::Mode::log, ProgressLine::to_stderr(),
+          flags.progress_interval);
+    if (progress) progress->start_ticker();
+    ranks = std::make_unique<parallel::RankProgress>(comm, progress.get());
+  }
+  options.progress = ranks.get();
   // Fail on a bad output name before any work.
   const driver::Output output =
       driver::plan_output(comm, args.output, args.gather, driver::is_distributed(comm, options), args.format,
@@ -99,6 +118,7 @@ void run_mesh(MeshArgs& args, const GlobalFlags& flags, int& exit_code) {
         parallel::run_collectively(comm, [&] { outputs.commit(); });
         // Data on standard output: the summary goes to stderr.
         const bool data_on_stdout = io::is_standard_output(args.report) || io::is_standard_output(output.path);
+        if (progress) progress->finish();
         if (comm.rank() == 0) print_summary(data_on_stdout ? stderr : stdout, run, output, flags);
         exit_code = run.aspect.above_bound > 0 ? 3 : 0;
       },
@@ -116,24 +136,42 @@ void add_mesh_command(CLI::App& app, GlobalFlags& flags, int& exit_code) {
   cmd->add_option("-o,--output", args->output,
                   "Output mesh: .vtu, .msh (Gmsh 4.1), .inp (Abaqus) or .mesh (Medit); in parallel also .pvtu "
                   "(one .vtu piece per rank)")
-      ->required();
+      ->required()
+      ->check(output_path());
   cmd->add_option("--format", args->format, "Mesh format when -o does not name one (-o - writes standard output)")
       ->check(CLI::IsMember({"vtu", "msh", "inp", "mesh"}));
   cmd->add_option("--plane", args->plane,
                   "2D .inp output: plane stress (CPS3 elements, the default) or plane strain (CPE3)")
       ->check(CLI::IsMember({"stress", "strain"}));
-  cmd->add_option("--report", args->report, "Write a JSON report (counts, per-phase measure, aspect ratios, timings)");
-  cmd->add_option("--svg", args->svg, "Write a picture of the 2D mesh coloured by phase");
+  cmd->add_option("--report", args->report, "Write a JSON report (counts, per-phase measure, aspect ratios, timings)")
+      ->check(output_path());
+  cmd->add_option("--svg", args->svg,
+                  "Write a picture of the mesh coloured by phase (3D: the slice through the domain centre, "
+                  "--svg-axis and --svg-at)")
+      ->check(output_path());
+  cmd->add_option("--svg-axis", args->svg_axis, "3D picture: the axis the slice plane is normal to")
+      ->check(CLI::IsMember({"x", "y", "z"}))
+      ->capture_default_str();
+  cmd->add_option("--svg-at", args->svg_at,
+                  "3D picture: the slice plane's coordinate along --svg-axis (default: the domain centre)")
+      ->check(number_in(-1e30, 1e30));
   cmd->add_option("--alpha", knobs.alpha, "r-adaptivity snap threshold, fraction of the edge length")
-      ->check(CLI::Range(0.05, 0.5));
+      ->check(number_in(0.05, 0.5))
+      ->capture_default_str();
   cmd->add_option("--extra-levels", knobs.extra_levels,
                   "Levels beyond the largest requested one that may separate close interfaces")
-      ->check(CLI::Range(0, 10));
-  cmd->add_option("--bound", args->options.bound, "Aspect-ratio bound for the exit status (default 3 in 2D, 5 in 3D)");
+      ->check(number_in(0, 10, true))
+      ->capture_default_str();
+  cmd->add_option("--bound", args->options.bound, "Aspect-ratio bound for the exit status (default 3 in 2D, 5 in 3D)")
+      ->check(number_in(1, 1e6));
   cmd->add_option("--partitions", args->options.partitions,
                   "Mesh N load-balanced partitions with the parallel mesher (N >= MPI ranks; default under "
                   "mpiexec: one per rank)")
-      ->check(CLI::Range(1, 1 << 20));
+      ->check(number_in(1, 1 << 20, true));
+  cmd->add_option("--max-elements", args->options.max_elements,
+                  "Refuse a scene whose estimated mesh has more elements than this (default: what this "
+                  "machine's memory holds, at 160 bytes per element)")
+      ->check(number_in(1, 1e15));
   cmd->add_flag("--gather", args->gather,
                 "Parallel run: write one file on rank 0 (any format) instead of .pvtu pieces");
   cmd->add_flag("--fixed-ghost", args->fixed_ghost,
@@ -145,7 +183,7 @@ void add_mesh_command(CLI::App& app, GlobalFlags& flags, int& exit_code) {
   cmd->add_option("--ghost-cubes", ghost.margin3_cubes,
                   "Comparison (3D): a ghost of this many coarse cubes instead of the one derived from the "
                   "kernel's reach (lib/parallel/README.md); too few break partition invariance")
-      ->check(CLI::Range(0.0, 1e6))
+      ->check(number_in(0, 1e6))
       ->group("");
   cmd->callback([args, &flags, &exit_code] { run_mesh(*args, flags, exit_code); });
 }

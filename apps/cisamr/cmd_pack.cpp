@@ -28,8 +28,9 @@ void add_pack_command(CLI::App& app, GlobalFlags& flags, int& exit_code) {
   auto args = std::make_shared<PackArgs>();
   CLI::App* cmd = app.add_subcommand("pack", "Pack a virtual microstructure (hierarchical bounding boxes) into a scene");
   cmd->add_option("spec", args->spec, "Packing spec (cisamr-pack/1 JSON)")->required();
-  cmd->add_option("-o,--output", args->output, "Scene to write (cisamr-scene/1 JSON)")->required();
-  cmd->add_option("--seed", args->seed, "Override the spec's random seed")->check(CLI::NonNegativeNumber);
+  cmd->add_option("-o,--output", args->output, "Scene to write (cisamr-scene/1 JSON)")->required()->check(output_path());
+  cmd->add_option("--seed", args->seed, "Override the spec's random seed")
+      ->check(number_in(0, 9007199254740992.0, true));  // 2^53: every whole number up to it is exact
   cmd->callback([args, &flags, &exit_code] {
     PhaseTimes times;
     if (show_progress(flags)) std::fprintf(stderr, "cisamr: packing %s\n", args->spec.c_str());

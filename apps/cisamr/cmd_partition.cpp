@@ -43,16 +43,21 @@ void add_partition_command(CLI::App& app, GlobalFlags& flags, int& exit_code) {
   auto args = std::make_shared<PartitionArgs>();
   CLI::App* cmd = app.add_subcommand("partition", "Split the domain into load-balanced boxes (Algorithm 1)");
   cmd->add_option("scene", args->scene, "Scene (cisamr-scene/1 JSON)")->required();
-  cmd->add_option("-n,--parts", args->n, "Number of partitions")->required()->check(CLI::PositiveNumber);
-  cmd->add_option("-o,--output", args->output, "Partition file to write (cisamr-partition/1 JSON)")->required();
-  cmd->add_option("--svg", args->svg, "Also draw the boxes over the inclusions (3D: three z-slices)");
+  cmd->add_option("-n,--parts", args->n, "Number of partitions")->required()->check(number_in(1, 1 << 20, true));
+  cmd->add_option("-o,--output", args->output, "Partition file to write (cisamr-partition/1 JSON)")
+      ->required()
+      ->check(output_path());
+  cmd->add_option("--svg", args->svg, "Also draw the boxes over the inclusions (3D: three z-slices)")
+      ->check(output_path());
   cmd->add_flag("--compare-uniform", args->compare_uniform,
                 "Also compute a uniform grid of the same number of boxes and print both");
   cmd->add_flag("--no-rebalance", args->no_rebalance, "No face sliding after merging/bisection");
-  cmd->add_option("--method", args->method, "best (default), merge (Algorithm 1 only) or bisection")
-      ->check(CLI::IsMember({"best", "merge", "bisection"}));
+  cmd->add_option("--method", args->method, "best, merge (Algorithm 1 only) or bisection")
+      ->check(CLI::IsMember({"best", "merge", "bisection"}))
+      ->capture_default_str();
   cmd->add_option("--oversubscription", args->oversubscription, "Leaves per partition in the over-decomposition (≥)")
-      ->check(CLI::PositiveNumber);
+      ->check(number_in(1, 1 << 20, true))
+      ->capture_default_str();
   cmd->callback([args, &flags, &exit_code] {
     PhaseTimes times;
     if (show_progress(flags)) std::fprintf(stderr, "cisamr: partitioning %s into %d boxes\n", args->scene.c_str(), args->n);

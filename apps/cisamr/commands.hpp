@@ -13,6 +13,7 @@ namespace cisamr::app {
 struct GlobalFlags {
   bool quiet = false;    // no progress output
   bool verbose = false;  // phase timings
+  double progress_interval = 5;  // seconds between progress lines when stderr is not a terminal
 };
 
 void add_mesh_command(CLI::App& app, GlobalFlags& flags, int& exit_code);
@@ -23,6 +24,12 @@ void add_compare_command(CLI::App& app, GlobalFlags& flags, int& exit_code);  //
 
 // Progress lines go to stderr only when it is a terminal and --quiet is not given.
 bool show_progress(const GlobalFlags& flags);
+
+// Checks of option values (options.cpp). CLI11 prefixes the option's name: "--bound: must
+// be a number in [1, 1e+06] (got nan)". `number_in`: a finite number in [lo, hi], a whole
+// one where `whole`; `output_path`: not empty ("--output: an empty path: ...").
+CLI::Validator number_in(double lo, double hi, bool whole = false);
+CLI::Validator output_path();
 
 // Writes a report file whole (io::AtomicFile: it appears complete or not at all).
 inline void write_text_file(const std::string& path, std::string_view text) {

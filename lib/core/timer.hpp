@@ -5,6 +5,8 @@
 #include <utility>
 #include <vector>
 
+#include "core/progress.hpp"
+
 namespace cisamr {
 
 class PhaseTimes {
@@ -16,6 +18,8 @@ class PhaseTimes {
   }
   const std::vector<std::pair<std::string, double>>& phases() const { return phases_; }
 
+  Progress* progress = nullptr;  // told when each ScopedPhase on these times begins
+
  private:
   std::vector<std::pair<std::string, double>> phases_;
 };
@@ -24,7 +28,9 @@ class PhaseTimes {
 class ScopedPhase {
  public:
   ScopedPhase(PhaseTimes* times, std::string name)
-      : times_(times), name_(std::move(name)), start_(std::chrono::steady_clock::now()) {}
+      : times_(times), name_(std::move(name)), start_(std::chrono::steady_clock::now()) {
+    if (times_ != nullptr) begin_phase(times_->progress, name_);
+  }
   ~ScopedPhase() {
     if (times_)
       times_->add(name_, std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count());

@@ -1,6 +1,10 @@
 #include "driver/driver.hpp"
 
+#include <unistd.h>
+
 #include <algorithm>
+#include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <type_traits>
 #include <utility>
@@ -18,8 +22,57 @@
 namespace cisamr::driver {
 namespace {
 
-void tell(const Comm& comm, const Options& options, const std::string& what) {
-  if (options.progress && comm.rank() == 0) options.progress(what);
+// Phases without a timer of their own (the timed ones tell Options::progress through
+// PhaseTimes::progress).
+void tell(const Options& options, const std::string& what) { begin_phase(options.progress, what); }
+
+std::string about(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.2g", value);
+  return text;
+}
+
+// Refuses, before any memory is taken, a mesh estimated above Options::max_elements, and
+// more partitions than coarse cells. Throws InputError naming the scene's field.
+template <int Dim>
+void check_request(const geometry::SceneDesc& scene, const Options& options) {
+  const pipeline::MeshEstimate estimate = pipeline::estimate_mesh<Dim>(scene);
+  const double memory = static_cast<double>(sysconf(_SC_PHYS_PAGES)) * static_cast<double>(sysconf(_SC_PAGE_SIZE));
+  const double limit = options.max_elements > 0 ? options.max_elements : memory / kBytesPerElement;
+  if (estimate.total() > limit) {
+    std::string field = "mesh.h";
+    if (estimate.background <= limit && estimate.largest_inclusion >= 0) {
+      const auto k = static_cast<std::size_t>(estimate.largest_inclusion);
+      field = scene.inclusions[k].levels == scene.levels ? "mesh.levels" : geometry::inclusion_field(k) + ".levels";
+    }
+    const std::string limit_text =
+        options.max_elements > 0 ? "the limit of " + about(limit)
+                                 : "the " + about(limit) + " this machine's " + about(memory / 1e9) + " GB of memory holds";
+    throw InputError(scene.source, field,
+                     "the mesh would have about " + about(estimate.total()) + " elements (about " +
+                         about(estimate.total() * kBytesPerElement / 1e9) + " GB), more than " + limit_text +
+                         " (--max-elements overrides)");
+  }
+  if (options.partitions > 0) {
+    double cells = 1;
+    for (std::size_t d = 0; d < Dim; ++d) cells *= std::round((scene.domain_max[d] - scene.domain_min[d]) / scene.h);
+    if (options.partitions > cells)
+      throw InputError(scene.source, "", "--partitions " + std::to_string(options.partitions) +
+                                             ": more partitions than the scene's " + std::to_string(static_cast<long long>(cells)) +
+                                             " coarse cells (domain / mesh.h)");
+  }
+}
+
+// A MeshingError says what the rules could not build; the scene's `mesh` settings (h,
+// levels) are what to change: name the file and them, keeping the error collective or not.
+[[noreturn]] void rethrow_with_scene(const MeshingError& e, const std::string& scene_path) {
+  const std::string what = InputError(scene_path, "mesh", e.what()).what();
+  if (const auto* collective = dynamic_cast<const parallel::CollectiveFailure*>(&e)) {
+    parallel::CollectiveMeshingError agreed(what);
+    agreed.failed_rank = collective->failed_rank;
+    throw agreed;
+  }
+  throw MeshingError(what);
 }
 
 // Area (2D) or volume (3D) of cell c.
@@ -36,11 +89,8 @@ double cell_measure(const mesh::SimplexMesh<Dim>& m, std::size_t c) {
 template <int Dim>
 void mesh_sequential(const Comm& comm, const geometry::SceneDesc& scene, MeshRun<Dim>& run) {
   using Oracle = geometry::Oracle<Dim>;
-  tell(comm, run.options, "building the geometry oracle");
+  tell(run.options, "oracle");
   const Oracle oracle(scene);
-  tell(comm, run.options,
-       Dim == 2 ? "meshing (SAMR, r-adaptivity, subdivision)"
-                : "meshing (SAMR, r-adaptivity with the quality guard, face swapping, subdivision)");
   pipeline::Result<Dim> result = pipeline::mesh(oracle, run.options.pipeline);
   parallel::DistributedMesh<Dim>& m = run.mesh;
   m.piece.mesh = std::move(result.mesh);
@@ -110,7 +160,7 @@ std::variant<MeshRun<2>, MeshRun<3>> mesh_scene(const Comm& comm, const std::str
                                                  const Options& options) {
   const auto start = std::chrono::steady_clock::now();
   const bool distributed = is_distributed(comm, options);
-  tell(comm, options, "reading the scene");
+  tell(options, "read");
   geometry::SceneDesc scene;
   if (distributed)  // every rank reads the descriptors; STL triangles later, where needed
     parallel::run_collectively(comm, [&] {
@@ -121,23 +171,29 @@ std::variant<MeshRun<2>, MeshRun<3>> mesh_scene(const Comm& comm, const std::str
   const double read_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const auto mesh = [&]<int Dim>(MeshRun<Dim> run) -> std::variant<MeshRun<2>, MeshRun<3>> {
     run.options = options;
+    run.options.pipeline.progress = options.progress;
+    run.mesh.times.progress = run.options.pipeline.progress;
     run.distributed = distributed;
     run.ranks = comm.size();
     run.start = start;
     run.bound = options.bound > 0 ? options.bound : Dim == 2 ? 3.0 : 5.0;
     run.face_box = face_box<Dim>(scene, options.pipeline);
-    if (distributed) {
-      tell(comm, options, "meshing on " + std::to_string(comm.size()) + " rank(s)");
-      parallel::MeshOptions o{.pipeline = options.pipeline,
-                              .partitions = options.partitions > 0 ? options.partitions : comm.size(),
-                              .partitioning = {},
-                              .ghost = options.ghost};
-      run.mesh = parallel::mesh_distributed<Dim>(comm, std::move(scene), o);
-      run.mesh.times.add("read", read_seconds);
-      const std::int64_t files = run.mesh.stl_files_read;
-      run.stl_files_read = {-comm.allreduce_max(-files), comm.allreduce_max(files), comm.allreduce_sum(files)};
-    } else {
-      mesh_sequential<Dim>(comm, scene, run);
+    parallel::run_collectively(comm, [&] { check_request<Dim>(scene, options); });
+    try {
+      if (distributed) {
+        parallel::MeshOptions o{.pipeline = run.options.pipeline,
+                                .partitions = options.partitions > 0 ? options.partitions : comm.size(),
+                                .partitioning = {},
+                                .ghost = options.ghost};
+        run.mesh = parallel::mesh_distributed<Dim>(comm, std::move(scene), o);
+        run.mesh.times.add("read", read_seconds);
+        const std::int64_t files = run.mesh.stl_files_read;
+        run.stl_files_read = {-comm.allreduce_max(-files), comm.allreduce_max(files), comm.allreduce_sum(files)};
+      } else {
+        mesh_sequential<Dim>(comm, scene, run);
+      }
+    } catch (const MeshingError& e) {
+      rethrow_with_scene(e, scene_path);
     }
     take_figures(comm, run);
     return run;
@@ -170,10 +226,9 @@ Output plan_output(const Comm& comm, const std::string& requested, bool gather, 
 
 template <int Dim>
 void write_outputs(const Comm& comm, MeshRun<Dim>& run, const Output& output, const std::string& svg) {
-  tell(comm, run.options, "writing the mesh");
   ScopedPhase timer(&run.mesh.times, "write");
   const parallel::NumberedPiece<Dim>& piece = run.mesh.piece;
-  const bool picture = Dim == 2 && !svg.empty();
+  const bool picture = !svg.empty();
   // On one rank the piece is the whole mesh (nodes in global-id order).
   mesh::SimplexMesh<Dim> gathered_copy;
   if ((!output.pieces || picture) && comm.size() > 1) gathered_copy = parallel::gather_mesh<Dim>(comm, piece);
@@ -187,16 +242,17 @@ void write_outputs(const Comm& comm, MeshRun<Dim>& run, const Output& output, co
     parallel::write_pvtu<Dim>(comm, output.path, piece.mesh, run.mesh.phases, options);
   else
     parallel::write_gathered<Dim>(comm, output.path, gathered, run.mesh.phases, options);
-  if constexpr (Dim == 2)
-    if (picture)
-      parallel::run_collectively(comm, [&] {
-        if (comm.rank() != 0) return;
-        geometry::SceneDesc header;  // what the picture needs: phases and domain
-        header.phases = run.mesh.phases;
-        header.domain_min = {run.mesh.domain.min[0], run.mesh.domain.min[1], 0};
-        header.domain_max = {run.mesh.domain.max[0], run.mesh.domain.max[1], 0};
+  if (picture)
+    parallel::run_collectively(comm, [&] {
+      if (comm.rank() != 0) return;
+      geometry::SceneDesc header;  // what the picture needs: phases and domain
+      header.phases = run.mesh.phases;
+      for (int d = 0; d < Dim; ++d) header.domain_min[d] = run.mesh.domain.min[d], header.domain_max[d] = run.mesh.domain.max[d];
+      if constexpr (Dim == 2)
         io::write_mesh_svg(svg, gathered, header);
-      });
+      else
+        io::write_mesh_svg(svg, gathered, header, run.options.svg_slice);
+    });
 }
 
 template <int Dim>

@@ -12,6 +12,8 @@
 #include <vector>
 
 #include "core/comm.hpp"
+#include "core/progress.hpp"
+#include "io/mesh_svg.hpp"
 #include "parallel/distributed.hpp"
 #include "parallel/output.hpp"
 #include "quality/quality.hpp"
@@ -26,8 +28,19 @@ struct Options {
   parallel::GhostRule ghost;
   double bound = 0;     // aspect-ratio bound of the statistics (0: 3 in 2D, 5 in 3D)
   bool figures = true;  // per-phase counts and measures, checksum (a pass and a sort over the cells)
-  std::function<void(const std::string&)> progress;  // told on rank 0 when a stage begins
+  // A scene whose mesh pipeline::estimate_mesh puts above this many elements is refused
+  // before any work (InputError naming mesh.h or the levels). 0: as many as this machine's
+  // memory holds at kBytesPerElement each.
+  double max_elements = 0;
+  io::SlicePlane svg_slice;  // the plane of a 3D mesh's picture (write_outputs)
+  // Told of every phase (read, oracle, levels, samr, ..., write) on every rank: in a parallel
+  // run a parallel::RankProgress, which reports the slowest rank on rank 0.
+  Progress* progress = nullptr;
 };
+
+// Peak memory of a run per element, measured on the examples (about 90 bytes in 2D, 130
+// in 3D), with a margin.
+inline constexpr double kBytesPerElement = 160;
 
 // Whether `options` ask for the parallel mesher on `comm`.
 bool is_distributed(const Comm& comm, const Options& options);
@@ -71,7 +84,9 @@ Box<Dim> face_box(const geometry::SceneDesc& scene, const pipeline::Options& opt
 
 // Reads the scene (every rank parses it; STL files as lib/parallel's README says), meshes
 // it, and takes the aspect-ratio statistics, and with Options::figures the per-phase
-// figures and the checksum. Errors are thrown on every rank alike.
+// figures and the checksum. Before meshing it refuses a scene above Options::max_elements
+// and more partitions than the scene has coarse cells (InputError); a MeshingError names the
+// scene file and its `mesh` settings. Errors are thrown on every rank alike.
 std::variant<MeshRun<2>, MeshRun<3>> mesh_scene(const Comm& comm, const std::string& scene_path,
                                                  const Options& options);
 
@@ -92,8 +107,8 @@ struct Output {
 Output plan_output(const Comm& comm, const std::string& requested, bool gather, bool distributed,
                    const std::string& format = "", io::PlaneKind plane = io::PlaneKind::stress);
 
-// Writes the mesh where `output` says and, in 2D with `svg` given, a picture of it (timed
-// as "write").
+// Writes the mesh where `output` says and, with `svg` given, a picture of it (3D: the slice
+// by Options::svg_slice) (timed as "write").
 template <int Dim>
 void write_outputs(const Comm& comm, MeshRun<Dim>& run, const Output& output, const std::string& svg);
 

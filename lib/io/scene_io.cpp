@@ -27,6 +27,9 @@ constexpr int kMaxLevels = 20;
 constexpr std::size_t kMaxPhases = 64;  // PhaseMask has 64 bits
 constexpr double kDivisionTolerance = 1e-9;
 constexpr double kRotationTolerance = 1e-9;
+// Lengths the mesher handles (domain coordinates, extents, h): it meshes alike from 1e-60
+// to 1e60; near 1e±100 products of lengths in the quality measures leave the double range.
+constexpr double kMinLength = 1e-30, kMaxLength = 1e30;
 // Base grid cells (domain extent / h per axis, multiplied): 2^40, beyond any memory.
 constexpr double kMaxBaseCells = 1099511627776.0;
 
@@ -528,12 +531,19 @@ SceneDesc SceneReader::scene(const json& root) const {
       corner = vec<3>(v, field);
     }
     (key[1] == 'i' ? s.domain_min : s.domain_max) = corner;
+    for (int d = 0; d < dim; ++d)
+      if (!(std::abs(corner[d]) <= kMaxLength))
+        fail(index(field, d), number_text(corner[d]) + " is beyond the supported range [-" + number_text(kMaxLength) +
+                                  ", " + number_text(kMaxLength) + "]");
   }
   for (int d = 0; d < dim; ++d)
     if (!(s.domain_min[d] < s.domain_max[d]))
       fail(index("domain.max", d), "must be greater than domain.min[" + std::to_string(d) +
                                        "] (" + number_text(s.domain_max[d]) +
                                        " <= " + number_text(s.domain_min[d]) + ")");
+    else if (!(s.domain_max[d] - s.domain_min[d] >= kMinLength))
+      fail(index("domain.max", d), "the extent " + number_text(s.domain_max[d] - s.domain_min[d]) +
+                                       " is below the supported " + number_text(kMinLength));
   if (const json* p = member(domain, "periodic")) s.periodic = boolean(*p, "domain.periodic");
 
   // mesh
@@ -541,6 +551,7 @@ SceneDesc SceneReader::scene(const json& root) const {
   expect_object(mesh, "mesh");
   check_keys(mesh, "mesh", {"h", "levels"});
   s.h = positive(required(mesh, "mesh", "h"), "mesh.h");
+  if (s.h < kMinLength) fail("mesh.h", number_text(s.h) + " is below the supported " + number_text(kMinLength));
   double base_cells = 1;
   for (int d = 0; d < dim; ++d) {
     const double extent = s.domain_max[d] - s.domain_min[d];

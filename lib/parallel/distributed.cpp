@@ -203,6 +203,8 @@ DistributedMesh<Dim> mesh_distributed(const Comm& comm, geometry::SceneDesc scen
   DistributedMesh<Dim> out;
   const int ranks = comm.size(), rank = comm.rank();
   const int n = options.partitions;
+  Progress* const progress = options.pipeline.progress;  // this rank's (the driver: rank 0's)
+  out.times.progress = progress;
   out.times.add("read", 0);
   run_collectively(comm, [&] {
     if (scene.dimension != Dim)
@@ -313,8 +315,14 @@ DistributedMesh<Dim> mesh_distributed(const Comm& comm, geometry::SceneDesc scen
   std::vector<PartitionOutput<Dim>> outputs;
   std::vector<PartitionSummary> mine;
   pipeline::Counters<Dim> local;
+  // Progress: the kernel as one phase, advanced per partition (not its stages, per partition).
+  pipeline::Options kernel_options = options.pipeline;
+  kernel_options.progress = nullptr;
+  out.times.progress = nullptr;
+  begin_phase(progress, "kernel");
   run_collectively(comm, [&] {
     for (int p = first; p < last; ++p) {
+      if (progress != nullptr) progress->advance(p - first, last - first);
       const GhostRegion<Dim>& region = regions[static_cast<std::size_t>(p - first)];
       std::unique_ptr<Oracle> oracle;
       {
@@ -335,7 +343,7 @@ DistributedMesh<Dim> mesh_distributed(const Comm& comm, geometry::SceneDesc scen
       std::vector<int> region_levels;
       for (std::int32_t k : region.inclusions) region_levels.push_back(levels[static_cast<std::size_t>(k)]);
       PartitionOutput<Dim> o{
-          p, region.box, pipeline::run(*oracle, lattice, region.box, region.ghost, options.pipeline, p, region_levels)};
+          p, region.box, pipeline::run(*oracle, lattice, region.box, region.ghost, kernel_options, p, region_levels)};
       std::int64_t box_cells = 1;
       for (int d = 0; d < Dim; ++d) box_cells *= region.box.count(d);
       PartitionSummary s;
@@ -357,7 +365,9 @@ DistributedMesh<Dim> mesh_distributed(const Comm& comm, geometry::SceneDesc scen
       mine.push_back(s);
       outputs.push_back(std::move(o));
     }
+    if (progress != nullptr) progress->advance(last - first, last - first);
   });
+  out.times.progress = progress;
 
   {
     ScopedPhase timer(&out.times, "merge");

@@ -1,12 +1,18 @@
 // The only file that includes <mpi.h>: MpiComm implements core::Comm over MPI_COMM_WORLD.
 #include "parallel/session.hpp"
 
+#include <algorithm>
+#include <chrono>
 #include <climits>
-#include <memory>
 #include <cstdlib>
 #include <cstring>
+#include <exception>
+#include <functional>
+#include <memory>
 #include <stdexcept>
 #include <string>
+#include <thread>
+#include <vector>
 
 #ifdef CISAMR_HAVE_MPI
 #include <mpi.h>
@@ -17,6 +23,8 @@ namespace {
 
 const SerialComm kSerial;
 const Comm* g_world = nullptr;
+// Set on rank 0 by a RankProgress: what to do while a reduction waits for the other ranks.
+std::function<void()> g_while_waiting;
 
 #ifdef CISAMR_HAVE_MPI
 class MpiComm final : public Comm {
@@ -71,7 +79,26 @@ class MpiComm final : public Comm {
   template <class T>
   static T reduce(T v, MPI_Datatype type, MPI_Op op) {
     T out{};
-    MPI_Allreduce(&v, &out, 1, type, op, MPI_COMM_WORLD);
+    if (!g_while_waiting) {
+      MPI_Allreduce(&v, &out, 1, type, op, MPI_COMM_WORLD);
+      return out;
+    }
+    // Progress being reported (a RankProgress on every rank: a blocking and a non-blocking
+    // reduction do not match, so all ranks poll): the same reduction, polled, so that rank 0
+    // goes on reporting while the others are still working.
+    MPI_Request request = MPI_REQUEST_NULL;
+    MPI_Iallreduce(&v, &out, 1, type, op, MPI_COMM_WORLD, &request);
+    int done = 0;
+    MPI_Test(&request, &done, MPI_STATUS_IGNORE);
+    auto last_call = std::chrono::steady_clock::now();
+    while (done == 0) {
+      if (std::chrono::steady_clock::now() - last_call > std::chrono::milliseconds(50)) {
+        g_while_waiting();
+        last_call = std::chrono::steady_clock::now();
+      }
+      std::this_thread::sleep_for(std::chrono::microseconds(100));
+      MPI_Test(&request, &done, MPI_STATUS_IGNORE);
+    }
     return out;
   }
   int rank_ = 0, size_ = 1;
@@ -126,6 +153,155 @@ void MpiSession::abort(int exit_code) const {
   if (uses_mpi_) MPI_Abort(MPI_COMM_WORLD, exit_code);
 #endif
   std::exit(exit_code);
+}
+
+struct RankProgress::Impl {
+  Progress* renderer = nullptr;
+  int rank = 0, size = 1;
+  // This rank's state: phases begun, the current one's name and work done.
+  struct State {
+    std::int64_t ordinal = 0, done = 0, total = 0;
+    std::string name;
+    bool finished = false;
+  };
+  State own;
+  int uncaught = 0;  // std::uncaught_exceptions() at construction
+#ifdef CISAMR_HAVE_MPI
+  static constexpr int kTag = 1;
+  struct Message {
+    std::int64_t ordinal, done, total, finished;
+    char name[32];
+  };
+  MPI_Comm channel = MPI_COMM_NULL;
+  MPI_Request pending = MPI_REQUEST_NULL;
+  Message outgoing{};
+  double last_sent = -1e300;
+  std::vector<State> states;  // rank 0: every rank's latest
+  int shown_rank = -1;
+  std::int64_t shown_ordinal = -1, shown_done = -1;
+
+  // Ranks other than 0: the latest state to rank 0, unless the last message is still in
+  // flight or (`throttled`) less than a second old.
+  void send(bool throttled) {
+    const double now = MPI_Wtime();
+    if (throttled && now - last_sent < 1.0) return;
+    int free = 1;
+    if (pending != MPI_REQUEST_NULL) MPI_Test(&pending, &free, MPI_STATUS_IGNORE);
+    if (free == 0) return;
+    outgoing = Message{own.ordinal, own.done, own.total, 0, {}};
+    std::strncpy(outgoing.name, own.name.c_str(), sizeof outgoing.name - 1);
+    MPI_Isend(&outgoing, sizeof outgoing, MPI_BYTE, 0, kTag, channel, &pending);
+    last_sent = now;
+  }
+  void receive(bool wait) {
+    MPI_Status status;
+    int arrived = 1;
+    if (!wait) MPI_Iprobe(MPI_ANY_SOURCE, kTag, channel, &arrived, &status);
+    if (arrived == 0) return;
+    Message m{};
+    MPI_Recv(&m, sizeof m, MPI_BYTE, MPI_ANY_SOURCE, kTag, channel, &status);
+    State& s = states[static_cast<std::size_t>(status.MPI_SOURCE)];
+    s.ordinal = m.ordinal, s.done = m.done, s.total = m.total, s.finished = m.finished != 0;
+    m.name[sizeof m.name - 1] = '\0';
+    s.name = m.name;
+  }
+  // Rank 0: what has arrived, then the slowest unfinished rank's state to the renderer.
+  void report() {
+    for (;;) {
+      int arrived = 0;
+      MPI_Iprobe(MPI_ANY_SOURCE, kTag, channel, &arrived, MPI_STATUS_IGNORE);
+      if (arrived == 0) break;
+      receive(true);
+    }
+    states[0] = own;
+    int slowest = -1;
+    const auto share = [](const State& s) { return s.total > 0 ? double(s.done) / double(s.total) : 0.0; };
+    for (int r = 0; r < size; ++r) {
+      const State& s = states[static_cast<std::size_t>(r)];
+      if (s.finished || s.ordinal == 0) continue;
+      const State* b = slowest < 0 ? nullptr : &states[static_cast<std::size_t>(slowest)];
+      if (b == nullptr || s.ordinal < b->ordinal || (s.ordinal == b->ordinal && share(s) < share(*b))) slowest = r;
+    }
+    if (slowest < 0 || renderer == nullptr) return;
+    const State& s = states[static_cast<std::size_t>(slowest)];
+    if (slowest != shown_rank || s.ordinal != shown_ordinal) {
+      renderer->phase(s.name + " (slowest: rank " + std::to_string(slowest) + ")");
+      shown_rank = slowest, shown_ordinal = s.ordinal, shown_done = -1;
+    }
+    if (s.total > 0 && s.done != shown_done) {
+      renderer->advance(s.done, s.total);
+      shown_done = s.done;
+    }
+  }
+#endif
+  void update(bool new_phase) {
+#ifdef CISAMR_HAVE_MPI
+    if (size > 1) {
+      if (rank == 0)
+        report();
+      else
+        send(!new_phase);  // a new phase is sent at once unless the last message is in flight
+      return;
+    }
+#endif
+    if (renderer == nullptr) return;
+    if (new_phase) renderer->phase(own.name);
+    else renderer->advance(own.done, own.total);
+  }
+};
+
+RankProgress::RankProgress(const Comm& comm, Progress* renderer) : impl_(std::make_unique<Impl>()) {
+  impl_->renderer = renderer;
+  impl_->rank = comm.rank();
+  impl_->size = comm.size();
+  impl_->uncaught = std::uncaught_exceptions();
+#ifdef CISAMR_HAVE_MPI
+  if (impl_->size > 1) {
+    MPI_Comm_dup(MPI_COMM_WORLD, &impl_->channel);
+    if (impl_->rank == 0) {
+      impl_->states.resize(static_cast<std::size_t>(impl_->size));
+      g_while_waiting = [impl = impl_.get()] { impl->report(); };
+    } else {
+      g_while_waiting = [] {};  // polls like rank 0 (above); nothing to report meanwhile
+    }
+  }
+#endif
+}
+
+RankProgress::~RankProgress() {
+#ifdef CISAMR_HAVE_MPI
+  Impl& p = *impl_;
+  if (p.size > 1) {
+    g_while_waiting = nullptr;
+    if (std::uncaught_exceptions() > p.uncaught) {
+      // Unwinding: the error may be this rank's alone (the job is about to be aborted), so
+      // wait for nobody. What is in flight is a few bytes, sent eagerly.
+      if (p.pending != MPI_REQUEST_NULL) MPI_Request_free(&p.pending);
+      return;
+    }
+    // Every rank's last message is received before the channel goes: nothing stays in flight.
+    if (p.rank == 0) {
+      for (int r = 1; r < p.size; ++r)
+        while (!p.states[static_cast<std::size_t>(r)].finished) p.receive(true);
+    } else {
+      if (p.pending != MPI_REQUEST_NULL) MPI_Wait(&p.pending, MPI_STATUS_IGNORE);
+      Impl::Message last{p.own.ordinal, p.own.done, p.own.total, 1, {}};
+      MPI_Send(&last, sizeof last, MPI_BYTE, 0, Impl::kTag, p.channel);
+    }
+    MPI_Comm_free(&p.channel);
+  }
+#endif
+}
+
+void RankProgress::phase(const std::string& name) {
+  impl_->own = {impl_->own.ordinal + 1, 0, 0, name, false};
+  impl_->update(true);
+}
+
+void RankProgress::advance(std::int64_t done, std::int64_t total) {
+  impl_->own.done = done;
+  impl_->own.total = total;
+  impl_->update(false);
 }
 
 const Comm& world() { return g_world != nullptr ? *g_world : kSerial; }

@@ -29,6 +29,34 @@ grid::Lattice<Dim> make_lattice(const geometry::SceneDesc& scene, const Options&
 }
 
 template <int Dim>
+MeshEstimate estimate_mesh(const geometry::SceneDesc& scene) {
+  // Calibrated on the examples: about 2 triangles per square, 6 tetrahedra per cube, and a
+  // band of refined cells 3 wide along an interface, its coarser levels adding as much again.
+  constexpr double kPerCell = Dim == 2 ? 2.0 : 6.0;
+  constexpr double kBand = 2 * 3 * kPerCell;
+  MeshEstimate estimate;
+  double cells = 1;
+  for (std::size_t d = 0; d < Dim; ++d) cells *= std::round((scene.domain_max[d] - scene.domain_min[d]) / scene.h);
+  estimate.background = kPerCell * cells;
+  double largest = 0;
+  const std::vector<Box3> boxes = holding_boxes(scene);  // empty for an STL surface not loaded
+  for (std::size_t k = 0; k < scene.inclusions.size(); ++k) {
+    const Box3& box = boxes[k];
+    std::array<double, Dim> side{};
+    for (std::size_t d = 0; d < Dim; ++d)
+      side[d] = std::max(0.0, std::min(box.max[d], scene.domain_max[d]) - std::max(box.min[d], scene.domain_min[d]));
+    // The interface's size: the box's perimeter (2D) or surface area (3D).
+    const double size = Dim == 2 ? 2 * (side[0] + side[1])
+                                 : 2 * (side[0] * side[1] + side[1] * side[Dim - 1] + side[0] * side[Dim - 1]);
+    const double fine = scene.h / std::exp2(scene.inclusions[k].levels);
+    const double added = kBand * size / std::pow(fine, Dim - 1);
+    estimate.refined += added;
+    if (added > largest) largest = added, estimate.largest_inclusion = static_cast<std::int64_t>(k);
+  }
+  return estimate;
+}
+
+template <int Dim>
 grid::CellRange<Dim> ghosted_range(const grid::Lattice<Dim>& lattice, const grid::CellRange<Dim>& box, int ghost) {
   grid::CellRange<Dim> range = box;
   for (int d = 0; d < Dim; ++d) {
@@ -91,6 +119,7 @@ template <int Dim>
 Result<Dim> run(const geometry::Oracle<Dim>& oracle, const grid::Lattice<Dim>& lattice, const grid::CellRange<Dim>& box,
                 int ghost, const Options& options, int partition_id, std::span<const int> levels) {
   Result<Dim> result;
+  result.times.progress = options.progress;
   MeshParts<Dim> parts = run_stages(oracle, lattice, box, ghost, options, levels, result);
   {
     ScopedPhase timer(&result.times, "assemble");
@@ -101,12 +130,14 @@ Result<Dim> run(const geometry::Oracle<Dim>& oracle, const grid::Lattice<Dim>& l
 
 Result<2> mesh(const geometry::Oracle2& oracle, const Options& options) {
   const grid::Lattice2 lattice = make_lattice<2>(oracle.scene(), options);
+  begin_phase(options.progress, "levels");
   const std::vector<int> levels = effective_levels2(oracle.scene(), lattice);
   return run(oracle, lattice, lattice.whole_domain(), 0, options, 0, levels);
 }
 
 Result<3> mesh(const geometry::Oracle3& oracle, const Options& options) {
   const grid::Lattice3 lattice = make_lattice<3>(oracle.scene(), options);
+  begin_phase(options.progress, "levels");
   const std::vector<int> levels =
       effective_levels3(oracle.scene(), lattice, {}, surface_unions(oracle.scene()));
   return run(oracle, lattice, lattice.whole_domain(), 0, options, 0, levels);
@@ -114,6 +145,8 @@ Result<3> mesh(const geometry::Oracle3& oracle, const Options& options) {
 
 template grid::Lattice<2> make_lattice<2>(const geometry::SceneDesc&, const Options&);
 template grid::Lattice<3> make_lattice<3>(const geometry::SceneDesc&, const Options&);
+template MeshEstimate estimate_mesh<2>(const geometry::SceneDesc&);
+template MeshEstimate estimate_mesh<3>(const geometry::SceneDesc&);
 template grid::CellRange<2> ghosted_range<2>(const grid::Lattice<2>&, const grid::CellRange<2>&, int);
 template grid::CellRange<3> ghosted_range<3>(const grid::Lattice<3>&, const grid::CellRange<3>&, int);
 template void assemble<2>(const geometry::SceneDesc&, MeshParts<2>&&, int, Result<2>&);

@@ -11,6 +11,7 @@
 #include <type_traits>
 #include <vector>
 
+#include "core/progress.hpp"
 #include "core/timer.hpp"
 #include "geometry/oracle.hpp"
 #include "geometry/scene.hpp"
@@ -29,6 +30,7 @@ struct Options {
   int max_candidates3 = 2;  // snap candidates per node the 3D guard considers
   double bound3 = 5.0;
   double swap_trigger3 = 3.0;  // corner tets above this aspect ratio look for a face swap (0: none)
+  Progress* progress = nullptr;  // told of the stages (levels, samr, radapt, ...) as they begin
 };
 
 // What identifies an output node across partitions. 2D: its lattice key (grid::key2).
@@ -58,6 +60,20 @@ struct Result {
 // domain, and (3D) MeshingError when the lattice does not fit the 64-bit key.
 template <int Dim>
 grid::Lattice<Dim> make_lattice(const geometry::SceneDesc& scene, const Options& options);
+
+// A rough count of the elements a scene's mesh will have, before any memory is taken: the
+// background cells, and per inclusion a band along its interface at its requested level
+// (the interface's size taken from its box clipped to the domain; an STL surface whose
+// triangles are not loaded is left out). An estimate for refusing requests beyond the
+// machine, not a bound: rule R2 may refine further, empty boxes less.
+struct MeshEstimate {
+  double background = 0;  // elements of the unrefined lattice
+  double refined = 0;     // elements the inclusions' refinement adds
+  std::int64_t largest_inclusion = -1;  // the inclusion adding the most (-1: none)
+  double total() const { return background + refined; }
+};
+template <int Dim>
+MeshEstimate estimate_mesh(const geometry::SceneDesc& scene);
 
 // Meshes the coarse cells of `box` (global coarse indices), using `ghost` extra coarse
 // cells on each side (clipped to the domain) so that decisions inside the box are those
