@@ -177,9 +177,9 @@ std::variant<MeshRun<2>, MeshRun<3>> mesh_scene(const Comm& comm, const std::str
     run.ranks = comm.size();
     run.start = start;
     run.bound = options.bound > 0 ? options.bound : Dim == 2 ? 3.0 : 5.0;
-    run.face_box = face_box<Dim>(scene, options.pipeline);
     parallel::run_collectively(comm, [&] { check_request<Dim>(scene, options); });
     try {
+      run.face_box = face_box<Dim>(scene, options.pipeline);  // builds the lattice: may refuse the scene
       if (distributed) {
         parallel::MeshOptions o{.pipeline = run.options.pipeline,
                                 .partitions = options.partitions > 0 ? options.partitions : comm.size(),
