@@ -6,6 +6,7 @@
 
 #include "core/error.hpp"
 #include "geometry/box_tests.hpp"
+#include "geometry/shape_fields.hpp"
 #include "geometry/shape_model.hpp"
 #include "geometry/shapes.hpp"
 
@@ -306,6 +307,17 @@ class CircleFamily final : public FamilyOf<Circle> {
  public:
   std::string_view name() const override { return "circle"; }
   int dimension() const override { return 2; }
+  Shape read(const FieldReader& f) const override {
+    f.allow_keys({"center", "radius"});
+    Circle c;
+    c.center = f.vec<2>("center");
+    c.radius = f.positive("radius");
+    return c;
+  }
+  void write(const Shape& s, FieldWriter& f) const override {
+    f.vec("center", of(s).center);
+    f.number("radius", of(s).radius);
+  }
   Box3 bounding_box(const Shape& s) const override {
     const Circle& c = of(s);
     return {{c.center[0] - c.radius, c.center[1] - c.radius, 0}, {c.center[0] + c.radius, c.center[1] + c.radius, 0}};
@@ -344,6 +356,19 @@ class EllipseFamily final : public FamilyOf<Ellipse> {
  public:
   std::string_view name() const override { return "ellipse"; }
   int dimension() const override { return 2; }
+  Shape read(const FieldReader& f) const override {
+    f.allow_keys({"center", "semi_axes", "angle"});
+    Ellipse e;
+    e.center = f.vec<2>("center");
+    e.semi_axes = f.positive_vec<2>("semi_axes");
+    if (f.has("angle")) e.angle = f.number("angle");
+    return e;
+  }
+  void write(const Shape& s, FieldWriter& f) const override {
+    f.vec("center", of(s).center);
+    f.vec("semi_axes", of(s).semi_axes);
+    f.number("angle", of(s).angle);
+  }
   Box3 bounding_box(const Shape& s) const override {
     const Ellipse& e = of(s);
     const double cs = std::cos(e.angle), sn = std::sin(e.angle);

@@ -6,6 +6,7 @@
 
 #include "core/error.hpp"
 #include "geometry/predicates3.hpp"
+#include "geometry/shape_fields.hpp"
 #include "geometry/shape_model.hpp"
 
 namespace cisamr::geometry {
@@ -165,6 +166,20 @@ class CylinderFamily final : public FamilyOf<Cylinder> {
  public:
   std::string_view name() const override { return "cylinder"; }
   int dimension() const override { return 3; }
+  Shape read(const FieldReader& f) const override {
+    f.allow_keys({"start", "end", "radius"});
+    Cylinder c;
+    c.start = f.vec<3>("start");
+    c.end = f.vec<3>("end");
+    if (c.start == c.end) f.fail("end", "equals start (a cylinder of length 0)");
+    c.radius = f.positive("radius");
+    return c;
+  }
+  void write(const Shape& s, FieldWriter& f) const override {
+    f.vec("start", of(s).start);
+    f.vec("end", of(s).end);
+    f.number("radius", of(s).radius);
+  }
   Box3 bounding_box(const Shape& s) const override {
     Box3 b{};
     for (int i = 0; i < 3; ++i) {

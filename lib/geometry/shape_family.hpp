@@ -16,6 +16,8 @@ namespace cisamr::geometry {
 
 class CurveModel;    // shape_model.hpp (private to lib/geometry)
 class SurfaceModel;
+class FieldReader;   // shape_fields.hpp
+class FieldWriter;
 
 class ShapeFamily {
  public:
@@ -23,6 +25,11 @@ class ShapeFamily {
 
   virtual std::string_view name() const = 0;  // as the scene file names it ("circle")
   virtual int dimension() const = 0;          // 2 or 3
+
+  // The descriptor from its object in the scene file, every field checked (InputError
+  // naming the field), and back: the members after "shape", in the file's order.
+  virtual Shape read(const FieldReader& fields) const = 0;
+  virtual void write(const Shape& s, FieldWriter& fields) const = 0;
 
   // The operations of shapes.hpp on a descriptor of this family (see there).
   virtual Box3 bounding_box(const Shape& s) const = 0;
@@ -63,6 +70,10 @@ class ShapeFamily {
 
 // The family of a descriptor (shape_registry.cpp).
 const ShapeFamily& shape_family(const Shape& s);
+// The family the scene file calls `name`, or nullptr.
+const ShapeFamily* shape_family_named(std::string_view name);
+// The names of the families of one dimension, in the registry's order.
+std::vector<std::string_view> shape_family_names(int dimension);
 
 // Base of a family whose descriptor type is T: `of` unwraps the variant.
 template <class T>

@@ -8,6 +8,7 @@
 
 #include "core/error.hpp"
 #include "geometry/nurbs2.hpp"
+#include "geometry/shape_fields.hpp"
 #include "geometry/shape_model.hpp"
 #include "geometry/shape_family.hpp"
 #include "geometry/shapes_detail.hpp"
@@ -84,6 +85,26 @@ class NurbsCurveFamily final : public FamilyOf<NurbsCurve> {
  public:
   std::string_view name() const override { return "nurbs"; }
   int dimension() const override { return 2; }
+  Shape read(const FieldReader& f) const override {
+    f.allow_keys({"degree", "knots", "control_points", "weights"});
+    NurbsCurve n;
+    n.degree = f.integer_in("degree", 1, 30);
+    n.control_points = f.points2("control_points");
+    const std::size_t count = n.control_points.size();
+    if (count < static_cast<std::size_t>(n.degree) + 1)
+      f.fail("control_points", "a degree-" + std::to_string(n.degree) + " curve needs at least " +
+                                   std::to_string(n.degree + 1) + " control points, got " + std::to_string(count));
+    n.knots = read_knots(f, "knots", n.degree, count + n.degree + 1);
+    n.weights = read_weights(f, "weights", count);
+    return n;
+  }
+  void write(const Shape& s, FieldWriter& f) const override {
+    const NurbsCurve& n = of(s);
+    f.integer("degree", n.degree);
+    f.numbers("knots", n.knots);
+    f.points("control_points", n.control_points);
+    if (!n.weights.empty()) f.numbers("weights", n.weights);
+  }
   Box3 bounding_box(const Shape& s) const override {
     const nurbs::Region r = region_of(of(s));
     return detail::points_box(nurbs::flatten(r, 1e-12 * r.size));
@@ -115,6 +136,35 @@ class NurbsCurveFamily final : public FamilyOf<NurbsCurve> {
 };
 
 }  // namespace
+
+std::vector<double> read_knots(const FieldReader& fields, std::string_view key, int degree,
+                               std::size_t expected_count) {
+  const std::string field(key);
+  std::vector<double> k = fields.numbers(key);
+  if (expected_count != 0 && k.size() != expected_count)
+    fields.fail(field, "expected " + std::to_string(expected_count) + " knots (control points + degree + 1), got " +
+                           std::to_string(k.size()));
+  for (std::size_t i = 1; i < k.size(); ++i)
+    if (k[i] < k[i - 1])
+      fields.fail(field + "[" + std::to_string(i) + "]",
+                  "knots decrease (" + number_text(k[i]) + " after " + number_text(k[i - 1]) + ")");
+  const std::size_t first = static_cast<std::size_t>(degree);
+  const std::size_t last = k.size() - 1 - static_cast<std::size_t>(degree);
+  if (!(k[first] < k[last])) fields.fail(field, "the knots leave an empty parameter range");
+  return k;
+}
+
+std::vector<double> read_weights(const FieldReader& fields, std::string_view key, std::size_t expected_count) {
+  if (!fields.has(key)) return {};
+  const std::string field(key);
+  std::vector<double> w = fields.numbers(key);
+  if (w.size() != expected_count)
+    fields.fail(field, "expected " + std::to_string(expected_count) + " weights (one per control point), got " +
+                           std::to_string(w.size()));
+  for (std::size_t i = 0; i < w.size(); ++i)
+    if (!(w[i] > 0)) fields.fail(field + "[" + std::to_string(i) + "]", "must be positive (got " + number_text(w[i]) + ")");
+  return w;
+}
 
 const ShapeFamily& nurbs_curve_family() {
   static const NurbsCurveFamily family;

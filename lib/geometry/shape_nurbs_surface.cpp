@@ -3,10 +3,13 @@
 #include "geometry/shape_nurbs_surface.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <stdexcept>
 
 #include "core/error.hpp"
+#include "geometry/shape_fields.hpp"
+#include "geometry/shape_nurbs_curve.hpp"
 #include "geometry/shape_model.hpp"
 
 namespace cisamr::geometry {
@@ -14,10 +17,53 @@ namespace {
 
 [[noreturn]] void not_implemented() { throw std::logic_error("not implemented yet"); }
 
+NurbsPatch read_patch(const FieldReader& f) {
+  f.allow_keys({"degree", "knots_u", "knots_v", "control_points", "weights"});
+  NurbsPatch p;
+  std::array<std::size_t, 2> counts{};
+  for (int a = 0; a < 2; ++a) {
+    p.degree[a] = f.integer_of("degree", 2, static_cast<std::size_t>(a), 1, 30, "degree in u and v");
+    const char* key = a == 0 ? "knots_u" : "knots_v";
+    const std::size_t size = f.array_size(key);
+    const std::size_t minimum = 2 * static_cast<std::size_t>(p.degree[a] + 1);
+    if (size < minimum)
+      f.fail(key, "a degree-" + std::to_string(p.degree[a]) + " direction needs at least " + std::to_string(minimum) +
+                      " knots, got " + std::to_string(size));
+    (a == 0 ? p.knots_u : p.knots_v) = read_knots(f, key, p.degree[a], 0);
+    counts[a] = size - static_cast<std::size_t>(p.degree[a]) - 1;
+  }
+  p.control_points = f.points3("control_points");
+  const std::size_t expected = counts[0] * counts[1];
+  if (p.control_points.size() != expected)
+    f.fail("control_points", "the knot vectors give " + std::to_string(counts[0]) + " × " + std::to_string(counts[1]) +
+                                 " = " + std::to_string(expected) + " control points (u fastest), got " +
+                                 std::to_string(p.control_points.size()));
+  p.weights = read_weights(f, "weights", expected);
+  return p;
+}
+
 class NurbsSurfaceFamily final : public FamilyOf<NurbsSurface> {
  public:
   std::string_view name() const override { return "nurbs_surface"; }
   int dimension() const override { return 3; }
+  Shape read(const FieldReader& f) const override {
+    f.allow_keys({"patches"});
+    NurbsSurface surface;
+    if (f.array_size("patches") == 0) f.fail("patches", "needs at least one patch");
+    f.objects("patches", [&](const FieldReader& patch) { surface.patches.push_back(read_patch(patch)); });
+    return surface;
+  }
+  void write(const Shape& s, FieldWriter& f) const override {
+    const std::vector<NurbsPatch>& patches = of(s).patches;
+    f.objects("patches", patches.size(), [&](FieldWriter& w, std::size_t i) {
+      const NurbsPatch& p = patches[i];
+      w.integers("degree", {p.degree[0], p.degree[1]});
+      w.numbers("knots_u", p.knots_u);
+      w.numbers("knots_v", p.knots_v);
+      w.points("control_points", p.control_points);
+      if (!p.weights.empty()) w.numbers("weights", p.weights);
+    });
+  }
   Box3 bounding_box(const Shape&) const override { not_implemented(); }
   Box3 holding_box(const Shape& s) const override {
     Box3 b{{INFINITY, INFINITY, INFINITY}, {-INFINITY, -INFINITY, -INFINITY}};

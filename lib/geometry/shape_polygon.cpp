@@ -8,6 +8,7 @@
 #include "core/error.hpp"
 #include "geometry/box_index.hpp"
 #include "geometry/box_tests.hpp"
+#include "geometry/shape_fields.hpp"
 #include "geometry/shape_model.hpp"
 #include "geometry/shape_family.hpp"
 #include "geometry/shapes_detail.hpp"
@@ -216,6 +217,18 @@ class PolygonFamily final : public FamilyOf<Polygon> {
  public:
   std::string_view name() const override { return "polygon"; }
   int dimension() const override { return 2; }
+  Shape read(const FieldReader& f) const override {
+    f.allow_keys({"vertices", "closed"});
+    if (f.has("closed") && !f.boolean("closed")) f.fail("closed", "open polygon: an inclusion must be a closed region");
+    Polygon p;
+    p.vertices = f.points2("vertices");
+    // A repeated first vertex at the end (GeoJSON style) closes the ring explicitly.
+    if (p.vertices.size() > 1 && p.vertices.front() == p.vertices.back()) p.vertices.pop_back();
+    if (p.vertices.size() < 3)
+      f.fail("vertices", "open polygon: needs at least 3 distinct vertices, got " + std::to_string(p.vertices.size()));
+    return p;
+  }
+  void write(const Shape& s, FieldWriter& f) const override { f.points("vertices", of(s).vertices); }
   Box3 bounding_box(const Shape& s) const override { return detail::points_box(of(s).vertices); }
   double measure(const Shape& s) const override { return polygon_area(of(s).vertices); }
   double boundary_measure(const Shape& s) const override {

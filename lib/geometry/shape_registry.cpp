@@ -1,6 +1,7 @@
 // The one place that lists the shape families, one per alternative of the Shape variant
 // (scene.hpp), in the variant's order. Adding a shape means adding its
-// shape_<family>.{hpp,cpp}, its alternative in scene.hpp and one line here.
+// shape_<family>.{hpp,cpp} (with CMakeLists.txt), its alternative in scene.hpp and one
+// line here; the scene reader and writer find it here by name.
 #include <array>
 #include <stdexcept>
 
@@ -16,8 +17,10 @@
 
 namespace cisamr::geometry {
 
-const ShapeFamily& shape_family(const Shape& s) {
-  static const std::array<const ShapeFamily*, std::variant_size_v<Shape>> families{
+namespace {
+
+const std::array<const ShapeFamily*, std::variant_size_v<Shape>>& families() {
+  static const std::array<const ShapeFamily*, std::variant_size_v<Shape>> all{
       &circle_family(),     // Circle
       &ellipse_family(),    // Ellipse
       &polygon_family(),    // Polygon
@@ -28,7 +31,24 @@ const ShapeFamily& shape_family(const Shape& s) {
       &stl_family(),        // StlSurface
       &nurbs_surface_family(),  // NurbsSurface
   };
-  return *families[s.index()];
+  return all;
+}
+
+}  // namespace
+
+const ShapeFamily& shape_family(const Shape& s) { return *families()[s.index()]; }
+
+const ShapeFamily* shape_family_named(std::string_view name) {
+  for (const ShapeFamily* family : families())
+    if (family->name() == name) return family;
+  return nullptr;
+}
+
+std::vector<std::string_view> shape_family_names(int dimension) {
+  std::vector<std::string_view> names;
+  for (const ShapeFamily* family : families())
+    if (family->dimension() == dimension) names.push_back(family->name());
+  return names;
 }
 
 // Defaults of ShapeFamily (shape_family.hpp).

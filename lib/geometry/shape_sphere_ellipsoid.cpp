@@ -7,6 +7,7 @@
 #include "core/error.hpp"
 #include "geometry/box_tests.hpp"
 #include "geometry/predicates3.hpp"
+#include "geometry/shape_fields.hpp"
 #include "geometry/shape_model.hpp"
 
 namespace cisamr::geometry {
@@ -430,6 +431,17 @@ class SphereFamily final : public FamilyOf<Sphere> {
  public:
   std::string_view name() const override { return "sphere"; }
   int dimension() const override { return 3; }
+  Shape read(const FieldReader& f) const override {
+    f.allow_keys({"center", "radius"});
+    Sphere s;
+    s.center = f.vec<3>("center");
+    s.radius = f.positive("radius");
+    return s;
+  }
+  void write(const Shape& s, FieldWriter& f) const override {
+    f.vec("center", of(s).center);
+    f.number("radius", of(s).radius);
+  }
   Box3 bounding_box(const Shape& s) const override {
     const Sphere& sp = of(s);
     const double r = sp.radius;
@@ -476,6 +488,20 @@ class EllipsoidFamily final : public FamilyOf<Ellipsoid> {
  public:
   std::string_view name() const override { return "ellipsoid"; }
   int dimension() const override { return 3; }
+  Shape read(const FieldReader& f) const override {
+    f.allow_keys({"center", "semi_axes", "rotation"});
+    Ellipsoid e;
+    e.center = f.vec<3>("center");
+    e.semi_axes = f.positive_vec<3>("semi_axes");
+    if (f.has("rotation")) e.rotation = f.rotation("rotation");
+    return e;
+  }
+  void write(const Shape& s, FieldWriter& f) const override {
+    const Ellipsoid& e = of(s);
+    f.vec("center", e.center);
+    f.vec("semi_axes", e.semi_axes);
+    if (!is_identity(e.rotation)) f.rotation("rotation", e.rotation);
+  }
   Box3 bounding_box(const Shape& s) const override {
     const Ellipsoid& e = of(s);
     Box3 b{};

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "core/error.hpp"
+#include "geometry/shape_fields.hpp"
 #include "geometry/shape_model.hpp"
 #include "geometry/stl_mesh.hpp"
 
@@ -105,6 +106,24 @@ class StlFamily final : public FamilyOf<StlSurface> {
  public:
   std::string_view name() const override { return "stl"; }
   int dimension() const override { return 3; }
+  Shape read(const FieldReader& f) const override {
+    f.allow_keys({"file", "scale", "rotation", "translate"});
+    StlSurface s;
+    SurfaceFile file = f.surface_file("file");
+    s.file = std::move(file.path);
+    s.triangles = std::move(file.triangles);
+    if (f.has("scale")) s.scale = f.positive("scale");
+    if (f.has("rotation")) s.rotation = f.rotation("rotation");
+    if (f.has("translate")) s.translate = f.vec<3>("translate");
+    return s;
+  }
+  void write(const Shape& shape, FieldWriter& f) const override {
+    const StlSurface& s = of(shape);
+    f.file("file", s.file);
+    if (s.scale != 1) f.number("scale", s.scale);
+    if (!is_identity(s.rotation)) f.rotation("rotation", s.rotation);
+    if (s.translate != Vec3{0, 0, 0}) f.vec("translate", s.translate);
+  }
   // A surface whose triangles are not loaded (a parallel rank that did not read the file)
   // has an empty box, no measure, no samples and contains nothing.
   Box3 bounding_box(const Shape& s) const override {

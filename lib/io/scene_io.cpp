@@ -1,18 +1,21 @@
 #include "io/scene_io.hpp"
 
 #include <algorithm>
-#include <charconv>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <set>
+#include <span>
 #include <string_view>
 
 #include "core/error.hpp"
 #include "core/input_file.hpp"
+#include "geometry/shape_family.hpp"
+#include "geometry/shape_fields.hpp"
 #include "io/atomic_file.hpp"
 #include "io/stl_io.hpp"
 
@@ -32,13 +35,6 @@ constexpr double kRotationTolerance = 1e-9;
 constexpr double kMinLength = 1e-30, kMaxLength = 1e30;
 // Base grid cells (domain extent / h per axis, multiplied): 2^40, beyond any memory.
 constexpr double kMaxBaseCells = 1099511627776.0;
-
-// Shortest text that reads back to the same double.
-std::string number_text(double value) {
-  char buffer[32];
-  const auto result = std::to_chars(buffer, buffer + sizeof buffer, value);
-  return std::string(buffer, result.ptr);
-}
 
 std::string join(const std::string& path, std::string_view key) {
   return path.empty() ? std::string(key) : path + "." + std::string(key);
@@ -257,22 +253,18 @@ class SceneReader {
     return v.get<std::string>();
   }
 
-  template <int N>
-  Vec<N> vec(const json& v, const std::string& field) const {
-    if (!v.is_array() || v.size() != N)
-      fail(field, "expected an array of " + std::to_string(N) + " numbers, got " +
+  // An array of exactly out.size() numbers.
+  void fixed_numbers(const json& v, const std::string& field, std::span<double> out) const {
+    if (!v.is_array() || v.size() != out.size())
+      fail(field, "expected an array of " + std::to_string(out.size()) + " numbers, got " +
                       (v.is_array() ? "an array of " + std::to_string(v.size())
                                     : type_text(v)));
-    Vec<N> result;
-    for (int d = 0; d < N; ++d) result[d] = number(v[d], index(field, d));
-    return result;
+    for (std::size_t d = 0; d < out.size(); ++d) out[d] = number(v[d], index(field, d));
   }
   template <int N>
-  Vec<N> positive_vec(const json& v, const std::string& field) const {
-    const Vec<N> result = vec<N>(v, field);
-    for (int d = 0; d < N; ++d)
-      if (!(result[d] > 0))
-        fail(index(field, d), "must be positive (got " + number_text(result[d]) + ")");
+  Vec<N> vec(const json& v, const std::string& field) const {
+    Vec<N> result;
+    fixed_numbers(v, field, result);
     return result;
   }
   template <int N>
@@ -313,177 +305,23 @@ class SceneReader {
     return r;
   }
 
-  // Non-decreasing knots with a non-empty parameter range; returns them.
-  std::vector<double> knots(const json& v, const std::string& field, int degree,
-                            std::size_t expected_count) const {
-    std::vector<double> k = numbers(v, field);
-    if (expected_count != 0 && k.size() != expected_count)
-      fail(field, "expected " + std::to_string(expected_count) +
-                      " knots (control points + degree + 1), got " + std::to_string(k.size()));
-    for (std::size_t i = 1; i < k.size(); ++i)
-      if (k[i] < k[i - 1])
-        fail(index(field, i), "knots decrease (" + number_text(k[i]) + " after " +
-                                  number_text(k[i - 1]) + ")");
-    const std::size_t first = static_cast<std::size_t>(degree);
-    const std::size_t last = k.size() - 1 - static_cast<std::size_t>(degree);
-    if (!(k[first] < k[last])) fail(field, "the knots leave an empty parameter range");
-    return k;
-  }
-  std::vector<double> weights(const json* v, const std::string& field,
-                              std::size_t expected_count) const {
-    if (!v) return {};
-    std::vector<double> w = numbers(*v, field);
-    if (w.size() != expected_count)
-      fail(field, "expected " + std::to_string(expected_count) +
-                      " weights (one per control point), got " + std::to_string(w.size()));
-    for (std::size_t i = 0; i < w.size(); ++i)
-      if (!(w[i] > 0)) fail(index(field, i), "must be positive (got " + number_text(w[i]) + ")");
-    return w;
-  }
-
-  Shape shape_2d(const std::string& name, const json& object, const std::string& field) const {
-    if (name == "circle") {
-      check_keys(object, field, {"shape", "phase", "levels", "center", "radius"});
-      Circle c;
-      c.center = vec<2>(required(object, field, "center"), join(field, "center"));
-      c.radius = positive(required(object, field, "radius"), join(field, "radius"));
-      return c;
-    }
-    if (name == "ellipse") {
-      check_keys(object, field, {"shape", "phase", "levels", "center", "semi_axes", "angle"});
-      Ellipse e;
-      e.center = vec<2>(required(object, field, "center"), join(field, "center"));
-      e.semi_axes =
-          positive_vec<2>(required(object, field, "semi_axes"), join(field, "semi_axes"));
-      if (const json* a = member(object, "angle")) e.angle = number(*a, join(field, "angle"));
-      return e;
-    }
-    if (name == "polygon") {
-      check_keys(object, field, {"shape", "phase", "levels", "vertices", "closed"});
-      if (const json* closed = member(object, "closed"))
-        if (!boolean(*closed, join(field, "closed")))
-          fail(join(field, "closed"), "open polygon: an inclusion must be a closed region");
-      Polygon p;
-      const std::string vertices_field = join(field, "vertices");
-      p.vertices = points<2>(required(object, field, "vertices"), vertices_field);
-      // A repeated first vertex at the end (GeoJSON style) closes the ring explicitly.
-      if (p.vertices.size() > 1 && p.vertices.front() == p.vertices.back()) p.vertices.pop_back();
-      if (p.vertices.size() < 3)
-        fail(vertices_field, "open polygon: needs at least 3 distinct vertices, got " +
-                                 std::to_string(p.vertices.size()));
-      return p;
-    }
-    check_keys(object, field,
-               {"shape", "phase", "levels", "degree", "knots", "control_points", "weights"});
-    NurbsCurve n;
-    n.degree = integer_in(required(object, field, "degree"), join(field, "degree"), 1, 30);
-    const std::string points_field = join(field, "control_points");
-    n.control_points = points<2>(required(object, field, "control_points"), points_field);
-    const std::size_t count = n.control_points.size();
-    if (count < static_cast<std::size_t>(n.degree) + 1)
-      fail(points_field, "a degree-" + std::to_string(n.degree) + " curve needs at least " +
-                             std::to_string(n.degree + 1) + " control points, got " +
-                             std::to_string(count));
-    n.knots = knots(required(object, field, "knots"), join(field, "knots"), n.degree,
-                    count + n.degree + 1);
-    n.weights = weights(member(object, "weights"), join(field, "weights"), count);
-    return n;
-  }
-
-  NurbsPatch patch(const json& object, const std::string& field) const {
-    expect_object(object, field);
-    check_keys(object, field, {"degree", "knots_u", "knots_v", "control_points", "weights"});
-    NurbsPatch p;
-    const std::string degree_field = join(field, "degree");
-    const json& degree = required(object, field, "degree");
-    if (!degree.is_array() || degree.size() != 2)
-      fail(degree_field, "expected an array of 2 integers (degree in u and v)");
-    std::array<std::size_t, 2> counts{};
-    for (int a = 0; a < 2; ++a) {
-      p.degree[a] = integer_in(degree[a], index(degree_field, a), 1, 30);
-      const char* key = a == 0 ? "knots_u" : "knots_v";
-      const std::string knots_field = join(field, key);
-      const json& k = required(object, field, key);
-      expect_array(k, knots_field);
-      const std::size_t minimum = 2 * static_cast<std::size_t>(p.degree[a] + 1);
-      if (k.size() < minimum)
-        fail(knots_field, "a degree-" + std::to_string(p.degree[a]) + " direction needs at least " +
-                              std::to_string(minimum) + " knots, got " + std::to_string(k.size()));
-      (a == 0 ? p.knots_u : p.knots_v) = knots(k, knots_field, p.degree[a], 0);
-      counts[a] = k.size() - static_cast<std::size_t>(p.degree[a]) - 1;
-    }
-    const std::string points_field = join(field, "control_points");
-    p.control_points = points<3>(required(object, field, "control_points"), points_field);
-    const std::size_t expected = counts[0] * counts[1];
-    if (p.control_points.size() != expected)
-      fail(points_field, "the knot vectors give " + std::to_string(counts[0]) + " × " +
-                             std::to_string(counts[1]) + " = " + std::to_string(expected) +
-                             " control points (u fastest), got " +
-                             std::to_string(p.control_points.size()));
-    p.weights = weights(member(object, "weights"), join(field, "weights"), expected);
-    return p;
-  }
-
   std::string resolve(const std::string& file) const {
     fs::path p(file);
     if (p.is_relative()) p = base_directory_ / p;
     return fs::absolute(p).lexically_normal().string();
   }
 
-  Shape shape_3d(const std::string& name, const json& object, const std::string& field) const {
-    if (name == "sphere") {
-      check_keys(object, field, {"shape", "phase", "levels", "center", "radius"});
-      Sphere s;
-      s.center = vec<3>(required(object, field, "center"), join(field, "center"));
-      s.radius = positive(required(object, field, "radius"), join(field, "radius"));
-      return s;
+  // A file named in `field`: resolved against the scene file's directory; checked to be
+  // readable and loaded as the options ask.
+  SurfaceFile surface_file(const std::string& given, const std::string& field) const {
+    if (given.empty()) fail(field, "empty file name");
+    SurfaceFile file{resolve(given), {}};
+    if (load_stl_ || probe_stl_) {
+      const std::string problem = stl_file_problem(file.path);
+      if (!problem.empty()) fail(field, problem);
     }
-    if (name == "ellipsoid") {
-      check_keys(object, field,
-                 {"shape", "phase", "levels", "center", "semi_axes", "rotation"});
-      Ellipsoid e;
-      e.center = vec<3>(required(object, field, "center"), join(field, "center"));
-      e.semi_axes =
-          positive_vec<3>(required(object, field, "semi_axes"), join(field, "semi_axes"));
-      if (const json* r = member(object, "rotation")) e.rotation = rotation(*r, join(field, "rotation"));
-      return e;
-    }
-    if (name == "cylinder") {
-      check_keys(object, field, {"shape", "phase", "levels", "start", "end", "radius"});
-      Cylinder c;
-      c.start = vec<3>(required(object, field, "start"), join(field, "start"));
-      c.end = vec<3>(required(object, field, "end"), join(field, "end"));
-      if (c.start == c.end) fail(join(field, "end"), "equals start (a cylinder of length 0)");
-      c.radius = positive(required(object, field, "radius"), join(field, "radius"));
-      return c;
-    }
-    if (name == "stl") {
-      check_keys(object, field,
-                 {"shape", "phase", "levels", "file", "scale", "rotation", "translate"});
-      StlSurface s;
-      const std::string file_field = join(field, "file");
-      const std::string given = string(required(object, field, "file"), file_field);
-      if (given.empty()) fail(file_field, "empty file name");
-      s.file = resolve(given);
-      if (load_stl_ || probe_stl_) {
-        const std::string problem = stl_file_problem(s.file);
-        if (!problem.empty()) fail(file_field, problem);
-      }
-      if (load_stl_) s.triangles = read_stl(s.file);  // its own errors name the STL file and line
-      if (const json* v = member(object, "scale")) s.scale = positive(*v, join(field, "scale"));
-      if (const json* r = member(object, "rotation")) s.rotation = rotation(*r, join(field, "rotation"));
-      if (const json* t = member(object, "translate")) s.translate = vec<3>(*t, join(field, "translate"));
-      return s;
-    }
-    check_keys(object, field, {"shape", "phase", "levels", "patches"});
-    NurbsSurface surface;
-    const std::string patches_field = join(field, "patches");
-    const json& patches = required(object, field, "patches");
-    expect_array(patches, patches_field);
-    if (patches.empty()) fail(patches_field, "needs at least one patch");
-    for (std::size_t i = 0; i < patches.size(); ++i)
-      surface.patches.push_back(patch(patches[i], index(patches_field, i)));
-    return surface;
+    if (load_stl_) file.triangles = read_stl(file.path);  // its own errors name the STL file and line
+    return file;
   }
 
   SceneDesc scene(const json& root) const;
@@ -495,9 +333,73 @@ class SceneReader {
   bool probe_stl_ = true;  // without load_stl_: still check that each STL file can be opened
 };
 
-const std::vector<std::string_view> kShapes2 = {"circle", "ellipse", "polygon", "nurbs"};
-const std::vector<std::string_view> kShapes3 = {"sphere", "ellipsoid", "cylinder", "stl",
-                                                "nurbs_surface"};
+// The fields of one object of the scene file, for a shape family to read.
+class JsonFieldReader final : public FieldReader {
+ public:
+  // own_keys: the members the caller reads itself, allowed beside the family's.
+  JsonFieldReader(const SceneReader& reader, const json& object, std::string field,
+                  std::vector<std::string_view> own_keys)
+      : reader_(reader), object_(object), field_(std::move(field)), own_keys_(std::move(own_keys)) {}
+
+  [[noreturn]] void fail(const std::string& field, const std::string& problem) const override {
+    reader_.fail(join(field_, field), problem);
+  }
+  void allow_keys(const std::vector<std::string_view>& keys) const override {
+    std::vector<std::string_view> allowed = own_keys_;
+    allowed.insert(allowed.end(), keys.begin(), keys.end());
+    reader_.check_keys(object_, field_, allowed);
+  }
+  bool has(std::string_view key) const override { return reader_.member(object_, key) != nullptr; }
+  double number(std::string_view key) const override { return reader_.number(get(key), path(key)); }
+  double positive(std::string_view key) const override { return reader_.positive(get(key), path(key)); }
+  int integer_in(std::string_view key, int lo, int hi) const override {
+    return reader_.integer_in(get(key), path(key), lo, hi);
+  }
+  bool boolean(std::string_view key) const override { return reader_.boolean(get(key), path(key)); }
+  std::string string(std::string_view key) const override { return reader_.string(get(key), path(key)); }
+  void fixed_numbers(std::string_view key, std::vector<double>& out) const override {
+    reader_.fixed_numbers(get(key), path(key), out);
+  }
+  int integer_of(std::string_view key, std::size_t count, std::size_t i, int lo, int hi,
+                 std::string_view meaning) const override {
+    const json& v = get(key);
+    if (!v.is_array() || v.size() != count)
+      reader_.fail(path(key), "expected an array of " + std::to_string(count) + " integers (" +
+                                  std::string(meaning) + ")");
+    return reader_.integer_in(v[i], index(path(key), i), lo, hi);
+  }
+  std::vector<double> numbers(std::string_view key) const override { return reader_.numbers(get(key), path(key)); }
+  std::size_t array_size(std::string_view key) const override {
+    const json& v = get(key);
+    reader_.expect_array(v, path(key));
+    return v.size();
+  }
+  std::vector<Vec2> points2(std::string_view key) const override { return reader_.points<2>(get(key), path(key)); }
+  std::vector<Vec3> points3(std::string_view key) const override { return reader_.points<3>(get(key), path(key)); }
+  Rotation3 rotation(std::string_view key) const override { return reader_.rotation(get(key), path(key)); }
+  void objects(std::string_view key, const std::function<void(const FieldReader&)>& read_one) const override {
+    const json& v = get(key);
+    const std::string field = path(key);
+    reader_.expect_array(v, field);
+    for (std::size_t i = 0; i < v.size(); ++i) {
+      const std::string element = index(field, i);
+      reader_.expect_object(v[i], element);
+      read_one(JsonFieldReader(reader_, v[i], element, {}));
+    }
+  }
+  SurfaceFile surface_file(std::string_view key) const override {
+    return reader_.surface_file(string(key), path(key));
+  }
+
+ private:
+  std::string path(std::string_view key) const { return join(field_, key); }
+  const json& get(std::string_view key) const { return reader_.required(object_, field_, key); }
+
+  const SceneReader& reader_;
+  const json& object_;
+  std::string field_;
+  std::vector<std::string_view> own_keys_;
+};
 
 SceneDesc SceneReader::scene(const json& root) const {
   expect_object(root, "");
@@ -626,17 +528,16 @@ SceneDesc SceneReader::scene(const json& root) const {
       expect_object(object, field);
       const std::string shape_field = join(field, "shape");
       const std::string name = string(required(object, field, "shape"), shape_field);
-      const auto& own = dim == 2 ? kShapes2 : kShapes3;
-      const auto& other = dim == 2 ? kShapes3 : kShapes2;
-      if (std::find(own.begin(), own.end(), name) == own.end()) {
-        if (std::find(other.begin(), other.end(), name) != other.end())
-          fail(shape_field, "shape '" + name + "' is " + std::to_string(5 - dim) +
+      const ShapeFamily* family = shape_family_named(name);
+      if (family == nullptr || family->dimension() != dim) {
+        if (family != nullptr)
+          fail(shape_field, "shape '" + name + "' is " + std::to_string(family->dimension()) +
                                 "D but the scene is " + std::to_string(dim) + "D");
         fail(shape_field, "unknown shape '" + name + "' (" + std::to_string(dim) +
-                              "D shapes: " + list_text(own) + ")");
+                              "D shapes: " + list_text(shape_family_names(dim)) + ")");
       }
       Inclusion inclusion;
-      inclusion.shape = dim == 2 ? shape_2d(name, object, field) : shape_3d(name, object, field);
+      inclusion.shape = family->read(JsonFieldReader(*this, object, field, {"shape", "phase", "levels"}));
       const std::string phase_field = join(field, "phase");
       const json* phase = member(object, "phase");
       inclusion.phase = phase ? static_cast<int>(integer(*phase, phase_field)) : 2;
@@ -692,12 +593,6 @@ ordered rotation_json(const Rotation3& r) {
   for (const auto& row : r) a.push_back(vec_json(row));
   return a;
 }
-bool is_identity(const Rotation3& r) {
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j)
-      if (r[i][j] != (i == j ? 1.0 : 0.0)) return false;
-  return true;
-}
 
 // Absolute, normalised directory of a file ("" = the current directory's file).
 fs::path directory_of(const std::string& file) {
@@ -709,69 +604,50 @@ fs::path directory_of(const std::string& file) {
   return directory;
 }
 
+// The members of one object of the new scene file, as a shape family writes them.
+class JsonFieldWriter final : public FieldWriter {
+ public:
+  JsonFieldWriter(ordered& object, const fs::path& destination_directory)
+      : object_(object), destination_directory_(destination_directory) {}
+
+  void number(std::string_view key, double value) override { at(key) = value; }
+  void integer(std::string_view key, int value) override { at(key) = value; }
+  void numbers(std::string_view key, const std::vector<double>& values) override { at(key) = values; }
+  void integers(std::string_view key, const std::vector<int>& values) override { at(key) = values; }
+  void points(std::string_view key, const std::vector<Vec2>& points) override { at(key) = points_json(points); }
+  void points(std::string_view key, const std::vector<Vec3>& points) override { at(key) = points_json(points); }
+  void rotation(std::string_view key, const Rotation3& r) override { at(key) = rotation_json(r); }
+  void file(std::string_view key, const std::string& path) override {
+    // Relative to the new scene file, so that the pair can be moved together.
+    const fs::path target = fs::absolute(fs::path(path)).lexically_normal();
+    const fs::path relative = target.lexically_relative(destination_directory_);
+    at(key) = relative.empty() ? target.string() : relative.string();
+  }
+  void objects(std::string_view key, std::size_t count,
+               const std::function<void(FieldWriter&, std::size_t)>& write_one) override {
+    ordered array = ordered::array();
+    for (std::size_t i = 0; i < count; ++i) {
+      ordered element;
+      JsonFieldWriter writer(element, destination_directory_);
+      write_one(writer, i);
+      array.push_back(std::move(element));
+    }
+    at(key) = std::move(array);
+  }
+
+ private:
+  ordered& at(std::string_view key) { return object_[std::string(key)]; }
+
+  ordered& object_;
+  const fs::path& destination_directory_;
+};
+
 ordered shape_json(const Shape& shape, const fs::path& destination_directory) {
+  const ShapeFamily& family = shape_family(shape);
   ordered o;
-  std::visit(
-      [&](const auto& s) {
-        using T = std::decay_t<decltype(s)>;
-        if constexpr (std::is_same_v<T, Circle>) {
-          o["shape"] = "circle";
-          o["center"] = vec_json(s.center);
-          o["radius"] = s.radius;
-        } else if constexpr (std::is_same_v<T, Ellipse>) {
-          o["shape"] = "ellipse";
-          o["center"] = vec_json(s.center);
-          o["semi_axes"] = vec_json(s.semi_axes);
-          o["angle"] = s.angle;
-        } else if constexpr (std::is_same_v<T, Polygon>) {
-          o["shape"] = "polygon";
-          o["vertices"] = points_json(s.vertices);
-        } else if constexpr (std::is_same_v<T, NurbsCurve>) {
-          o["shape"] = "nurbs";
-          o["degree"] = s.degree;
-          o["knots"] = s.knots;
-          o["control_points"] = points_json(s.control_points);
-          if (!s.weights.empty()) o["weights"] = s.weights;
-        } else if constexpr (std::is_same_v<T, Sphere>) {
-          o["shape"] = "sphere";
-          o["center"] = vec_json(s.center);
-          o["radius"] = s.radius;
-        } else if constexpr (std::is_same_v<T, Ellipsoid>) {
-          o["shape"] = "ellipsoid";
-          o["center"] = vec_json(s.center);
-          o["semi_axes"] = vec_json(s.semi_axes);
-          if (!is_identity(s.rotation)) o["rotation"] = rotation_json(s.rotation);
-        } else if constexpr (std::is_same_v<T, Cylinder>) {
-          o["shape"] = "cylinder";
-          o["start"] = vec_json(s.start);
-          o["end"] = vec_json(s.end);
-          o["radius"] = s.radius;
-        } else if constexpr (std::is_same_v<T, StlSurface>) {
-          o["shape"] = "stl";
-          // Relative to the new scene file, so that the pair can be moved together.
-          const fs::path target = fs::absolute(fs::path(s.file)).lexically_normal();
-          const fs::path relative = target.lexically_relative(destination_directory);
-          o["file"] = relative.empty() ? target.string() : relative.string();
-          if (s.scale != 1) o["scale"] = s.scale;
-          if (!is_identity(s.rotation)) o["rotation"] = rotation_json(s.rotation);
-          if (s.translate != Vec3{0, 0, 0}) o["translate"] = vec_json(s.translate);
-        } else {
-          static_assert(std::is_same_v<T, NurbsSurface>);
-          o["shape"] = "nurbs_surface";
-          ordered patches = ordered::array();
-          for (const NurbsPatch& p : s.patches) {
-            ordered patch;
-            patch["degree"] = {p.degree[0], p.degree[1]};
-            patch["knots_u"] = p.knots_u;
-            patch["knots_v"] = p.knots_v;
-            patch["control_points"] = points_json(p.control_points);
-            if (!p.weights.empty()) patch["weights"] = p.weights;
-            patches.push_back(std::move(patch));
-          }
-          o["patches"] = std::move(patches);
-        }
-      },
-      shape);
+  o["shape"] = std::string(family.name());
+  JsonFieldWriter writer(o, destination_directory);
+  family.write(shape, writer);
   return o;
 }
 
