@@ -423,7 +423,9 @@ void Packer::setup_grid() {
   cell += gap_max_;
   double extent_max = 0;
   for (int d = 0; d < dim_; ++d) extent_max = std::max(extent_max, spec_.domain.max[d] - spec_.domain.min[d]);
-  cell = std::max(cell, extent_max / 1024);
+  // At most 1024² cells in 2D and 128³ in 3D (about 50 MB of empty lists): tiny particles in
+  // a huge domain make the cells longer than needed, never the grid larger than memory.
+  cell = std::max(cell, extent_max / (dim_ == 2 ? 1024 : 128));
   std::size_t total = 1;
   for (int d = 0; d < 3; ++d) {
     grid_origin_[d] = spec_.domain.min[d];

@@ -394,6 +394,15 @@ TEST(PackSpec, TrialsAndCountsAreBounded) {
             std::string::npos);
 }
 
+TEST(PackSpec, TinyParticlesInAHugeDomainKeepTheSearchGridSmall) {
+  // A 3D domain of side 1e5 with particles of radius 0.05 asked for a search grid of 1024³
+  // cell lists (24 GB): bad_alloc at once. The grid is bounded; the packing still holds.
+  const auto r = run(R"({"format": "cisamr-pack/1", "dimension": 3, "seed": 3,
+      "domain": {"min": [0, 0, 0], "max": [1e5, 1e5, 1e5]}, "mesh": {"h": 1000},
+      "populations": [{"shape": "sphere", "count": 5, "size": 0.05, "min_gap": 0.01}]})");
+  EXPECT_EQ(r.scene.inclusions.size(), 5u);
+}
+
 TEST(PackSpec, NonRegularFilesAreRefusedWithoutOpening) {
   const auto dir = std::filesystem::temp_directory_path() / ("cisamr_pack_fifo_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
