@@ -14,42 +14,19 @@
 #include <fstream>
 #include <string>
 
+#include "cli_fixture.hpp"
+
 namespace {
+
+using namespace cisamr;
 
 namespace fs = std::filesystem;
 
-struct CommandResult {
-  int exit_code;
-  std::string output;  // stdout and stderr
-};
+using test::CommandResult;
+CommandResult run(const std::string& args) { return test::run_cisamr(args); }
 
-CommandResult run(const std::string& args) {
-  const std::string cmd = std::string(CISAMR_BINARY_DIR) + "/bin/cisamr " + args + " 2>&1";
-  FILE* pipe = popen(cmd.c_str(), "r");
-  CommandResult r{-1, {}};
-  if (!pipe) return r;
-  std::array<char, 4096> buf;
-  while (std::fgets(buf.data(), buf.size(), pipe)) r.output += buf.data();
-  const int status = pclose(pipe);
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
-
-class Cli : public ::testing::Test {
+class Cli : public test::CliFolder {
  protected:
-  fs::path dir;
-  void SetUp() override {
-    dir = fs::temp_directory_path() / ("cisamr-cli-" + std::to_string(::getpid()) + "-" +
-                                       ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir);
-    fs::create_directories(dir);
-  }
-  void TearDown() override { fs::remove_all(dir); }
-  std::string write(const std::string& name, const std::string& text) {
-    const fs::path p = dir / name;
-    std::ofstream(p) << text;
-    return p.string();
-  }
   // Nothing but the inputs in the folder: no output, no temporary.
   std::size_t files_other_than_json() const {
     std::size_t n = 0;

@@ -13,30 +13,16 @@
 #include <iterator>
 #include <string>
 
+#include "cli_fixture.hpp"
+
 namespace {
+
+using namespace cisamr;
 
 namespace fs = std::filesystem;
 
-struct CommandResult {
-  int exit_code;
-  std::string output;  // stdout and stderr
-  double seconds;
-};
-
-CommandResult run(const std::string& args) {
-  // timeout: a request that hangs fails the test instead of the suite.
-  const std::string cmd = "timeout 60 " + std::string(CISAMR_BINARY_DIR) + "/bin/cisamr " + args + " 2>&1";
-  const auto start = std::chrono::steady_clock::now();
-  FILE* pipe = popen(cmd.c_str(), "r");
-  CommandResult r{-1, {}, 0};
-  if (!pipe) return r;
-  std::array<char, 4096> buf;
-  while (std::fgets(buf.data(), buf.size(), pipe)) r.output += buf.data();
-  const int status = pclose(pipe);
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  return r;
-}
+using test::CommandResult;
+CommandResult run(const std::string& args) { return test::run_cisamr(args); }
 
 std::size_t lines(const std::string& text) {
   std::size_t n = 0;
@@ -44,21 +30,8 @@ std::size_t lines(const std::string& text) {
   return n;
 }
 
-class CliOptions : public ::testing::Test {
+class CliOptions : public test::CliFolder {
  protected:
-  fs::path dir;
-  void SetUp() override {
-    dir = fs::temp_directory_path() / ("cisamr-cli-options-" + std::to_string(::getpid()) + "-" +
-                                       ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir);
-    fs::create_directories(dir);
-  }
-  void TearDown() override { fs::remove_all(dir); }
-  std::string write(const std::string& name, const std::string& text) {
-    const fs::path p = dir / name;
-    std::ofstream(p) << text;
-    return p.string();
-  }
   std::string out() const { return (dir / "out.vtu").string(); }
   bool out_exists() const { return fs::exists(dir / "out.vtu"); }
 };
