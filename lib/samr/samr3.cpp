@@ -148,25 +148,42 @@ class Refiner {
       // level 0, and there are none yet.
       queue_.push_back(r);
     }
+    // Within a sweep, its share of the next level's units: marking the first half, refining
+    // the second; a later sweep that reaches no new level reports nothing below the last.
+    std::int64_t reported = 0;
+    const auto report = [&](std::int64_t at) {
+      at = std::min(at, total);
+      if (at > reported) progress->advance(reported = at, total);
+    };
+    const auto report_in_sweep = [&](std::size_t i, std::size_t n, std::size_t half) {
+      if (progress != nullptr && (i & 4095) == 0)
+        report(std::int64_t{roots} * (1 + reached) +
+               std::int64_t{roots} * static_cast<std::int64_t>(half * n + i) / static_cast<std::int64_t>(2 * n));
+    };
     std::vector<std::int32_t> marked;
     while (true) {
       ++g_.sweeps;
       marked.clear();
-      for (std::int32_t t : queue_)
+      for (std::size_t i = 0; i < queue_.size(); ++i) {
+        report_in_sweep(i, queue_.size(), 0);
+        const std::int32_t t = queue_[i];
         if (g_.forest.is_leaf(t) && must_refine(t)) marked.push_back(t);
+      }
       if (marked.empty()) break;
       std::sort(marked.begin(), marked.end());
       ++sweep_;
       queue_.clear();
-      for (std::int32_t t : marked) {
+      for (std::size_t i = 0; i < marked.size(); ++i) {
+        report_in_sweep(i, marked.size(), 1);
+        const std::int32_t t = marked[i];
         const int level = g_.forest.tet(t).level;
         if (level >= max_level) throw MeshingError("SAMR rules ask for a level beyond the finest one (3D)");
         reached = std::max(reached, level + 1);
         refine(t);
       }
-      advance(progress, std::int64_t{roots} * (1 + reached), total);
+      if (progress != nullptr) report(std::int64_t{roots} * (1 + reached));
     }
-    advance(progress, total, total);
+    if (progress != nullptr) report(total);
   }
 
  private:

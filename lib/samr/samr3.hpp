@@ -72,7 +72,8 @@ struct RefinedGrid3 : TouchLists {
 // MeshingError when the rules ask for a level beyond lattice.max_level. `levels[k]` is the
 // level rule R1 asks of inclusion k (the oracle's index), as pipeline::effective_levels
 // computes them for partitions; empty: the inclusions' own levels. `progress` (may be null)
-// is advanced over the roots, then by the finest level the sweeps have refined to.
+// is advanced over the roots, then by the finest level the sweeps have refined to and
+// within each sweep.
 RefinedGrid3 refine3(const geometry::Oracle3& oracle, const grid::Lattice3& lattice,
                      const grid::CellRange<3>& range, std::span<const int> levels = {},
                      Progress* progress = nullptr);
