@@ -21,4 +21,14 @@ inline void begin_phase(Progress* progress, const std::string& name) {
   if (progress != nullptr) progress->phase(name);
 }
 
+inline void advance(Progress* progress, std::int64_t done, std::int64_t total) {
+  if (progress != nullptr) progress->advance(done, total);
+}
+
+// For a stage's inner loop: tells `progress` at every 4096th unit only, so that the call
+// costs nothing measurable; the stage ends with advance(progress, total, total).
+inline void advance_sometimes(Progress* progress, std::int64_t done, std::int64_t total) {
+  if (progress != nullptr && (done & 4095) == 0) progress->advance(done, total);
+}
+
 }  // namespace cisamr

@@ -44,10 +44,13 @@ class Swapper {
 
   Swaps3 run() {
     out_.block_of.assign(forest_.size(), -1);
-    if (options_.trigger <= 0) return std::move(out_);
-    find_candidates();
-    out_.candidates = static_cast<std::int64_t>(candidates_.size());
-    select();
+    const auto tets = static_cast<std::int64_t>(forest_.size());
+    if (options_.trigger > 0) {
+      find_candidates();
+      out_.candidates = static_cast<std::int64_t>(candidates_.size());
+      select();
+    }
+    advance(options_.progress, tets, tets);
     return std::move(out_);
   }
 
@@ -230,6 +233,7 @@ class Swapper {
     const int max_level = forest_.lattice().max_level;
     std::unordered_map<LatticeKey3, std::uint8_t> seen;  // apex key → axes already examined
     for (std::int32_t t = 0; t < static_cast<std::int32_t>(forest_.size()); ++t) {
+      advance_sometimes(options_.progress, t, static_cast<std::int64_t>(forest_.size()));
       if (!forest_.is_leaf(t) || forest_.kind(t) != tet::Kind::corner) continue;
       // A leaf with every vertex unmoved and no phase change keeps its honeycomb shape.
       const auto& ids = nodes_.tet_nodes[static_cast<std::size_t>(t)];

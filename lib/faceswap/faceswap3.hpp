@@ -21,6 +21,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/progress.hpp"
 #include "geometry/oracle.hpp"
 #include "grid/tet_lattice.hpp"
 #include "radapt/radapt3.hpp"
@@ -36,6 +37,7 @@ inline constexpr int kReachCells3 = kCompetitorCells3 + radapt::kReachCells3;
 
 struct Options3 {
   double trigger = 3.0;  // corner tets above this aspect ratio look for a swap (0: no swapping)
+  Progress* progress = nullptr;  // advanced over the forest's tets (may be null)
 };
 
 struct Swaps3 {

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <limits>
 #include <map>
+#include <optional>
 #include <regex>
 #include <type_traits>
 
@@ -35,6 +36,43 @@ std::string rename_inclusions(const std::string& text, const std::vector<std::in
   }
   return out + text.substr(last);
 }
+
+// The kernel phase of a rank, measured in its partitions done; the stages of the partition
+// being meshed (pipeline::run's phases, told as they begin and advance) add their share of
+// it, so that the job's progress moves, and rank 0 keeps receiving the other ranks'
+// messages, during a long partition too.
+class PartitionProgress final : public Progress {
+ public:
+  PartitionProgress(Progress& kernel, int partitions, int phases_per_partition)
+      : kernel_(kernel), partitions_(partitions), phases_per_partition_(phases_per_partition) {}
+  // This rank's partition number `done` (from 0) begins.
+  void start_partition(int done) {
+    done_ = done;
+    phases_ = 0;
+    report(0);
+  }
+  void finish() { report_units(std::int64_t{partitions_} * kUnits); }
+  void phase(const std::string&) override { ++phases_; }
+  void advance(std::int64_t done, std::int64_t total) override {
+    if (total > 0 && phases_ > 0)
+      report((phases_ - 1 + static_cast<double>(done) / static_cast<double>(total)) / phases_per_partition_);
+  }
+
+ private:
+  static constexpr std::int64_t kUnits = 1 << 16;  // per partition
+  Progress& kernel_;
+  const int partitions_, phases_per_partition_;
+  int done_ = 0, phases_ = 0;
+  std::int64_t reported_ = 0;
+
+  void report(double partition_fraction) {
+    report_units(done_ * kUnits + static_cast<std::int64_t>(std::clamp(partition_fraction, 0.0, 1.0) * kUnits));
+  }
+  void report_units(std::int64_t units) {
+    reported_ = std::max(reported_, units);  // never backwards, whatever a stage reports
+    kernel_.advance(reported_, std::int64_t{partitions_} * kUnits);
+  }
+};
 
 }  // namespace
 
@@ -315,14 +353,16 @@ DistributedMesh<Dim> mesh_distributed(const Comm& comm, geometry::SceneDesc scen
   std::vector<PartitionOutput<Dim>> outputs;
   std::vector<PartitionSummary> mine;
   pipeline::Counters<Dim> local;
-  // Progress: the kernel as one phase, advanced per partition (not its stages, per partition).
+  // Progress: the kernel as one phase, advanced per partition and within it by its stages.
+  std::optional<PartitionProgress> partition_progress;
+  if (progress != nullptr) partition_progress.emplace(*progress, last - first, pipeline::kRunPhases<Dim>);
   pipeline::Options kernel_options = options.pipeline;
-  kernel_options.progress = nullptr;
+  kernel_options.progress = partition_progress ? &*partition_progress : nullptr;
   out.times.progress = nullptr;
   begin_phase(progress, "kernel");
   run_collectively(comm, [&] {
     for (int p = first; p < last; ++p) {
-      if (progress != nullptr) progress->advance(p - first, last - first);
+      if (partition_progress) partition_progress->start_partition(p - first);
       const GhostRegion<Dim>& region = regions[static_cast<std::size_t>(p - first)];
       std::unique_ptr<Oracle> oracle;
       {
@@ -365,7 +405,7 @@ DistributedMesh<Dim> mesh_distributed(const Comm& comm, geometry::SceneDesc scen
       mine.push_back(s);
       outputs.push_back(std::move(o));
     }
-    if (progress != nullptr) progress->advance(last - first, last - first);
+    if (partition_progress) partition_progress->finish();
   });
   out.times.progress = progress;
 

@@ -13,7 +13,7 @@ MeshParts<2> run_stages(const geometry::Oracle2& oracle, const grid::Lattice2& l
   Counters<2>& counters = result.counters;
   samr::RefinedGrid2 grid = [&] {
     ScopedPhase timer(&result.times, "samr");
-    return samr::refine2(oracle, lattice, ghosted_range(lattice, box, ghost), levels);
+    return samr::refine2(oracle, lattice, ghosted_range(lattice, box, ghost), levels, options.progress);
   }();
   counters.coarse_cells = grid.forest.root_count();
   counters.refinements = grid.refinements;
@@ -21,14 +21,14 @@ MeshParts<2> run_stages(const geometry::Oracle2& oracle, const grid::Lattice2& l
 
   radapt::Nodes2 nodes = [&] {
     ScopedPhase timer(&result.times, "radapt");
-    return radapt::snap2(oracle, grid, radapt::Options{options.alpha});
+    return radapt::snap2(oracle, grid, radapt::Options{.alpha = options.alpha, .progress = options.progress});
   }();
   counters.lattice_nodes = static_cast<std::int64_t>(nodes.key.size());
   counters.snapped_nodes = nodes.snapped_count;
 
   subdivide::Triangles2 tris = [&] {
     ScopedPhase timer(&result.times, "subdivide");
-    return subdivide::subdivide2(oracle, grid, nodes, box, options.alpha);
+    return subdivide::subdivide2(oracle, grid, nodes, box, options.alpha, options.progress);
   }();
   counters.cut_quads = tris.cut_quads;
   counters.double_diagonal = tris.double_diagonal;

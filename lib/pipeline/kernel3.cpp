@@ -17,7 +17,7 @@ MeshParts<3> run_stages(const geometry::Oracle3& oracle, const grid::Lattice3& l
   const grid::CellRange<3> range = ghosted_range(lattice, box, ghost);
   samr::RefinedGrid3 grid = [&] {
     ScopedPhase timer(&result.times, "samr");
-    return samr::refine3(oracle, lattice, range, levels);
+    return samr::refine3(oracle, lattice, range, levels, options.progress);
   }();
   counters.coarse_cells = range.count(0) * range.count(1) * range.count(2);
   counters.refinements = grid.refinements;
@@ -30,7 +30,8 @@ MeshParts<3> run_stages(const geometry::Oracle3& oracle, const grid::Lattice3& l
     return radapt::snap3(oracle, grid,
                          radapt::Options3{.alpha = options.alpha, .alpha_diagonal = options.alpha_diagonal3,
                                           .max_candidates = options.max_candidates3,
-                                          .bound = options.bound3});
+                                          .bound = options.bound3,
+                                          .progress = options.progress});
   }();
   counters.lattice_nodes = static_cast<std::int64_t>(nodes.key.size());
   counters.snapped_nodes = nodes.snapped_count;
@@ -44,13 +45,13 @@ MeshParts<3> run_stages(const geometry::Oracle3& oracle, const grid::Lattice3& l
 
   const faceswap::Swaps3 swaps = [&] {
     ScopedPhase timer(&result.times, "faceswap");
-    return faceswap::swap3(oracle, grid, nodes, faceswap::Options3{.trigger = options.swap_trigger3});
+    return faceswap::swap3(oracle, grid, nodes, faceswap::Options3{.trigger = options.swap_trigger3, .progress = options.progress});
   }();
   counters.face_swaps = swaps.swaps;
 
   subdivide::Tets3 tets = [&] {
     ScopedPhase timer(&result.times, "subdivide");
-    return subdivide::subdivide3(oracle, grid, nodes, box, &swaps);
+    return subdivide::subdivide3(oracle, grid, nodes, box, &swaps, options.progress);
   }();
   counters.cut_tets = tets.cut_tets;
   counters.cut_nodes = tets.cut_nodes;

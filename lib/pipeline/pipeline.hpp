@@ -30,8 +30,14 @@ struct Options {
   int max_candidates3 = 2;  // snap candidates per node the 3D guard considers
   double bound3 = 5.0;
   double swap_trigger3 = 3.0;  // corner tets above this aspect ratio look for a face swap (0: none)
-  Progress* progress = nullptr;  // told of the stages (levels, samr, radapt, ...) as they begin
+  // Told of the stages (levels, samr, radapt, ...) as they begin, and advanced within each.
+  Progress* progress = nullptr;
 };
+
+// The phases `run` begins on its Progress, in this order: samr, radapt, (faceswap in 3D,)
+// subdivide, assemble; a caller that runs it on many partitions measures each run by them.
+template <int Dim>
+inline constexpr int kRunPhases = Dim == 2 ? 4 : 5;
 
 // What identifies an output node across partitions. 2D: its lattice key (grid::key2).
 // 3D: (key, key) for a lattice node, its edge's (smaller key, larger key) for a cut node.

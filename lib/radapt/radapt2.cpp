@@ -52,7 +52,9 @@ Nodes2 snap2(const geometry::Oracle2& oracle, const samr::RefinedGrid2& g, const
   //    one phase, so its corners take that phase without asking the oracle per corner.
   nodes.cell_corners.resize(forest.size());
   const PhaseMask matrix_bit = PhaseMask{1} << oracle.matrix_phase();
+  const auto cells = static_cast<std::int64_t>(forest.size());
   for (std::int32_t c = 0; c < static_cast<std::int32_t>(forest.size()); ++c) {
+    advance_sometimes(options.progress, c, 2 * cells);
     if (!forest.is_leaf(c)) continue;
     const std::int64_t x = forest.fine_x(c), y = forest.fine_y(c), s = forest.fine_size(c);
     const std::int32_t ids[4] = {add_node(x, y), add_node(x + s, y), add_node(x + s, y + s), add_node(x, y + s)};
@@ -116,6 +118,7 @@ Nodes2 snap2(const geometry::Oracle2& oracle, const samr::RefinedGrid2& g, const
 
   // Each node of a cut cell takes its nearest crossing closer than alpha·h_l.
   for (std::int32_t c = 0; c < static_cast<std::int32_t>(forest.size()); ++c) {
+    advance_sometimes(options.progress, cells + c, 2 * cells);
     if (!forest.is_leaf(c) || !g.is_cut(c)) continue;
     const std::int64_t x0 = forest.fine_x(c), y0 = forest.fine_y(c), s = forest.fine_size(c);
     const std::int64_t corners[4][2] = {{x0, y0}, {x0 + s, y0}, {x0 + s, y0 + s}, {x0, y0 + s}};
@@ -147,6 +150,7 @@ Nodes2 snap2(const geometry::Oracle2& oracle, const samr::RefinedGrid2& g, const
     nodes.snapped[static_cast<std::size_t>(s.node)] = 1;
   }
   nodes.snapped_count = static_cast<std::int64_t>(snaps.size());
+  advance(options.progress, 2 * cells, 2 * cells);
   return nodes;
 }
 

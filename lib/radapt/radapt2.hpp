@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/progress.hpp"
 #include "core/types.hpp"
 #include "geometry/oracle.hpp"
 #include "grid/key_map.hpp"
@@ -21,6 +22,7 @@ inline constexpr int kReachCells2 = 1;
 
 struct Options {
   double alpha = 0.5;  // snap threshold, fraction of the edge length
+  Progress* progress = nullptr;  // advanced over the forest's cells, twice (may be null)
 };
 
 // The nodes of the refined grid: lattice keys, positions after snapping and the phases

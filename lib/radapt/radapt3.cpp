@@ -61,6 +61,7 @@ class Snapper {
     build_options();
     if (options_.bound > 0) guard();
     apply();
+    advance(options_.progress, passes() * tets(), passes() * tets());
     return std::move(nodes_);
   }
 
@@ -85,6 +86,14 @@ class Snapper {
   std::vector<geometry::Crossing> crossings_;
 
   std::size_t node_count() const { return nodes_.key.size(); }
+
+  // Progress: one unit per tet of the forest in each pass over it (nodes, edges, and the
+  // guard's two), in that order.
+  std::int64_t tets() const { return static_cast<std::int64_t>(forest_.size()); }
+  std::int64_t passes() const { return options_.bound > 0 ? 4 : 2; }
+  void tet_done(int pass, std::int32_t t) const {
+    advance_sometimes(options_.progress, pass * tets() + t, passes() * tets());
+  }
   int option_count(std::int32_t v) const {
     return option_begin_[static_cast<std::size_t>(v) + 1] - option_begin_[static_cast<std::size_t>(v)];
   }
@@ -96,6 +105,7 @@ class Snapper {
     nodes_.tet_nodes.resize(forest_.size());
     const PhaseMask matrix_bit = PhaseMask{1} << oracle_.matrix_phase();
     for (std::int32_t t = 0; t < static_cast<std::int32_t>(forest_.size()); ++t) {
+      tet_done(0, t);
       if (!forest_.is_leaf(t)) continue;
       const auto v = forest_.fine_vertices(t);
       auto& ids = nodes_.tet_nodes[static_cast<std::size_t>(t)];
@@ -153,6 +163,7 @@ class Snapper {
     nodes_.cut_leaf_slot.assign(forest_.size(), -1);
     EdgeIndex& index = nodes_.edge_index;
     for (std::int32_t t = 0; t < static_cast<std::int32_t>(forest_.size()); ++t) {
+      tet_done(1, t);
       if (!forest_.is_leaf(t) || !g_.is_cut(t)) continue;
       const auto& ids = nodes_.tet_nodes[static_cast<std::size_t>(t)];
       std::array<std::int32_t, 6> slots{-1, -1, -1, -1, -1, -1};
@@ -389,6 +400,7 @@ class Snapper {
     const std::array<int, 4> first{0, 0, 0, 0};
     std::vector<std::uint8_t> likely(option_.size(), 0);  // pass 1's refusals
     for (std::int32_t t = 0; t < static_cast<std::int32_t>(forest_.size()); ++t) {
+      tet_done(2, t);
       if (!forest_.is_leaf(t) || !build_menu(t, menu, count)) continue;
       memo_leaf(t);
       for (int i = 0; i < 4; ++i) chosen[static_cast<std::size_t>(i)] = menu[static_cast<std::size_t>(i)][0];
@@ -401,6 +413,7 @@ class Snapper {
 
     std::vector<std::int32_t> local_refused;
     for (std::int32_t t = 0; t < static_cast<std::int32_t>(forest_.size()); ++t) {
+      tet_done(3, t);
       if (!forest_.is_leaf(t) || !build_menu(t, menu, count)) continue;
       ++nodes_.guarded_leaves;
       memo_leaf(t);

@@ -21,6 +21,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/progress.hpp"
 #include "core/types.hpp"
 #include "geometry/oracle.hpp"
 #include "grid/key_map.hpp"
@@ -40,6 +41,7 @@ struct Options3 {
   double alpha_diagonal = 0.2;  // along face diagonals (0: axis edges only, as in the paper)
   int max_candidates = 2;       // snap candidates kept per node (nearest first), at most 6
   double bound = 5.0;           // the guard's aspect-ratio bound; 0 disables the guard
+  Progress* progress = nullptr;  // advanced over the forest's tets, once per pass (may be null)
 };
 
 // How a node ended.

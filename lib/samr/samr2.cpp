@@ -16,15 +16,26 @@ class Refiner {
   Refiner(const geometry::Oracle2& oracle, RefinedGrid2& g, std::span<const int> levels)
       : oracle_(oracle), g_(g), levels_(levels) {}
 
-  void run() {
+  // Progress in units of 2 × roots: the roots set up (refine2), then the share of the cut
+  // roots whose refinement is finished. The stack is last in, first out, so the cut roots
+  // pushed first stay below all later work: once the stack is shorter than k, the cut
+  // roots above position k are finished.
+  void run(Progress* progress) {
     const std::int32_t roots = g_.forest.root_count();
     for (std::int32_t c = 0; c < roots; ++c)
       if (g_.is_cut(c)) stack_.push_back(c);
-    while (!stack_.empty()) {
+    const auto cut_roots = static_cast<std::int64_t>(stack_.size());
+    const std::int64_t total = 2 * std::int64_t{roots};
+    std::int64_t unfinished = cut_roots;
+    for (std::int64_t visits = 1; !stack_.empty(); ++visits) {
       const std::int32_t c = stack_.back();
       stack_.pop_back();
+      unfinished = std::min(unfinished, static_cast<std::int64_t>(stack_.size()));
       if (g_.forest.is_leaf(c)) visit(c);
+      if (progress != nullptr && (visits & 4095) == 0)
+        progress->advance(roots + (cut_roots - unfinished) * roots / cut_roots, total);
     }
+    advance(progress, total, total);
   }
 
  private:
@@ -123,7 +134,7 @@ class Refiner {
 }  // namespace
 
 RefinedGrid2 refine2(const geometry::Oracle2& oracle, const grid::Lattice2& lattice,
-                     const grid::CellRange<2>& range, std::span<const int> levels) {
+                     const grid::CellRange<2>& range, std::span<const int> levels, Progress* progress) {
   if (!levels.empty() && static_cast<int>(levels.size()) != oracle.inclusion_count())
     throw std::invalid_argument("refine2: one level per inclusion expected");
   RefinedGrid2 g{{}, grid::QuadForest(lattice, range), {}, {}, 0};
@@ -163,6 +174,7 @@ RefinedGrid2 refine2(const geometry::Oracle2& oracle, const grid::Lattice2& latt
   g.touch_begin.resize(static_cast<std::size_t>(roots));
   g.touch_count.resize(static_cast<std::size_t>(roots));
   for (std::int32_t r = 0; r < roots; ++r) {
+    advance_sometimes(progress, r, 2 * std::int64_t{roots});  // as Refiner::run's
     auto& list = per_root[static_cast<std::size_t>(r)];
     std::sort(list.begin(), list.end());
     g.root_candidate_begin[static_cast<std::size_t>(r)] = static_cast<std::int32_t>(g.root_candidates.size());
@@ -181,7 +193,7 @@ RefinedGrid2 refine2(const geometry::Oracle2& oracle, const grid::Lattice2& latt
   }
   g.root_candidate_begin[static_cast<std::size_t>(roots)] = static_cast<std::int32_t>(g.root_candidates.size());
 
-  Refiner(oracle, g, levels).run();
+  Refiner(oracle, g, levels).run(progress);
   return g;
 }
 

@@ -13,6 +13,7 @@
 #include <span>
 #include <vector>
 
+#include "core/progress.hpp"
 #include "geometry/oracle.hpp"
 #include "grid/quad_forest.hpp"
 #include "samr/touch_lists.hpp"
@@ -49,8 +50,10 @@ struct RefinedGrid2 : TouchLists {
 // Refines the coarse cells of `range` (the partition box plus its ghost layer).
 // `levels[k]` is the level rule R1 asks of inclusion k (the oracle's inclusion index);
 // pipeline::effective_levels2 computes them so that rule R4 never has to carry a level
-// from one inclusion to another. Empty: the inclusions' own levels.
+// from one inclusion to another. Empty: the inclusions' own levels. `progress` (may be null)
+// is advanced over the roots, then over the cut roots whose refinement is finished.
 RefinedGrid2 refine2(const geometry::Oracle2& oracle, const grid::Lattice2& lattice,
-                     const grid::CellRange<2>& range, std::span<const int> levels = {});
+                     const grid::CellRange<2>& range, std::span<const int> levels = {},
+                     Progress* progress = nullptr);
 
 }  // namespace cisamr::samr

@@ -131,9 +131,13 @@ class Refiner {
   Refiner(const geometry::Oracle3& oracle, RefinedGrid3& g, std::span<const int> levels)
       : oracle_(oracle), g_(g), levels_(levels), nodes_(g.touch_pool.size()) {}
 
-  void run() {
+  // Progress: `roots` units per level, the first for the roots' set-up (refine3), one more
+  // for each level the sweeps have refined to (they refine finer and finer, up to max_level).
+  void run(Progress* progress) {
     const int max_level = g_.forest.lattice().max_level;
     const std::int32_t roots = g_.forest.root_count();
+    const std::int64_t total = std::int64_t{roots} * (max_level + 1);
+    int reached = 0;
     queued_.assign(static_cast<std::size_t>(roots), 0);
     finest_.assign(static_cast<std::size_t>(roots / 5), 0);
     finest_near_.assign(static_cast<std::size_t>(roots / 5), 0);
@@ -144,22 +148,42 @@ class Refiner {
       // level 0, and there are none yet.
       queue_.push_back(r);
     }
+    // Within a sweep, its share of the next level's units: marking the first half, refining
+    // the second; a later sweep that reaches no new level reports nothing below the last.
+    std::int64_t reported = 0;
+    const auto report = [&](std::int64_t at) {
+      at = std::min(at, total);
+      if (at > reported) progress->advance(reported = at, total);
+    };
+    const auto report_in_sweep = [&](std::size_t i, std::size_t n, std::size_t half) {
+      if (progress != nullptr && (i & 4095) == 0)
+        report(std::int64_t{roots} * (1 + reached) +
+               std::int64_t{roots} * static_cast<std::int64_t>(half * n + i) / static_cast<std::int64_t>(2 * n));
+    };
     std::vector<std::int32_t> marked;
     while (true) {
       ++g_.sweeps;
       marked.clear();
-      for (std::int32_t t : queue_)
+      for (std::size_t i = 0; i < queue_.size(); ++i) {
+        report_in_sweep(i, queue_.size(), 0);
+        const std::int32_t t = queue_[i];
         if (g_.forest.is_leaf(t) && must_refine(t)) marked.push_back(t);
+      }
       if (marked.empty()) break;
       std::sort(marked.begin(), marked.end());
       ++sweep_;
       queue_.clear();
-      for (std::int32_t t : marked) {
-        if (g_.forest.tet(t).level >= max_level)
-          throw MeshingError("SAMR rules ask for a level beyond the finest one (3D)");
+      for (std::size_t i = 0; i < marked.size(); ++i) {
+        report_in_sweep(i, marked.size(), 1);
+        const std::int32_t t = marked[i];
+        const int level = g_.forest.tet(t).level;
+        if (level >= max_level) throw MeshingError("SAMR rules ask for a level beyond the finest one (3D)");
+        reached = std::max(reached, level + 1);
         refine(t);
       }
+      if (progress != nullptr) report(std::int64_t{roots} * (1 + reached));
     }
+    if (progress != nullptr) report(total);
   }
 
  private:
@@ -322,7 +346,7 @@ Box3 RefinedGrid3::box(std::int32_t t) const {
 }
 
 RefinedGrid3 refine3(const geometry::Oracle3& oracle, const grid::Lattice3& lattice,
-                     const grid::CellRange<3>& range, std::span<const int> levels) {
+                     const grid::CellRange<3>& range, std::span<const int> levels, Progress* progress) {
   if (!levels.empty() && static_cast<int>(levels.size()) != oracle.inclusion_count())
     throw std::invalid_argument("refine3: one level per inclusion expected");
   RefinedGrid3 g{{}, grid::TetForest(lattice, range), {}, {}, 0, 0};
@@ -372,7 +396,9 @@ RefinedGrid3 refine3(const geometry::Oracle3& oracle, const grid::Lattice3& latt
   const std::int32_t roots = g.forest.root_count();
   g.touch_begin.resize(static_cast<std::size_t>(roots));
   g.touch_count.resize(static_cast<std::size_t>(roots));
+  const std::int64_t total = std::int64_t{roots} * (lattice.max_level + 1);  // as Refiner::run's
   for (std::int32_t r = 0; r < roots; ++r) {
+    advance_sometimes(progress, r, total);
     g.touch_begin[static_cast<std::size_t>(r)] = static_cast<std::int32_t>(g.touch_pool.size());
     const Box3 box = g.box(r);
     std::uint16_t n = 0;
@@ -383,7 +409,7 @@ RefinedGrid3 refine3(const geometry::Oracle3& oracle, const grid::Lattice3& latt
       }
     g.touch_count[static_cast<std::size_t>(r)] = n;
   }
-  Refiner(oracle, g, levels).run();
+  Refiner(oracle, g, levels).run(progress);
   return g;
 }
 

@@ -20,6 +20,7 @@
 #include <span>
 #include <vector>
 
+#include "core/progress.hpp"
 #include "geometry/oracle.hpp"
 #include "grid/tet_forest.hpp"
 #include "samr/touch_lists.hpp"
@@ -70,8 +71,11 @@ struct RefinedGrid3 : TouchLists {
 // Refines the coarse cubes of `range` (a partition box plus its ghost layer). Throws
 // MeshingError when the rules ask for a level beyond lattice.max_level. `levels[k]` is the
 // level rule R1 asks of inclusion k (the oracle's index), as pipeline::effective_levels
-// computes them for partitions; empty: the inclusions' own levels.
+// computes them for partitions; empty: the inclusions' own levels. `progress` (may be null)
+// is advanced over the roots, then by the finest level the sweeps have refined to and
+// within each sweep.
 RefinedGrid3 refine3(const geometry::Oracle3& oracle, const grid::Lattice3& lattice,
-                     const grid::CellRange<3>& range, std::span<const int> levels = {});
+                     const grid::CellRange<3>& range, std::span<const int> levels = {},
+                     Progress* progress = nullptr);
 
 }  // namespace cisamr::samr

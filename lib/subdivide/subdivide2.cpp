@@ -49,12 +49,15 @@ class Subdivider {
              double collapse_fraction)
       : oracle_(oracle), g_(g), forest_(g.forest), nodes_(nodes), collapse_fraction_(collapse_fraction) {}
 
-  Triangles2 run(const grid::CellRange<2>& owned) {
+  Triangles2 run(const grid::CellRange<2>& owned, Progress* progress) {
+    const auto cells = static_cast<std::int64_t>(forest_.size());
     for (std::int32_t c = 0; c < static_cast<std::int32_t>(forest_.size()); ++c) {
+      advance_sometimes(progress, c, cells);
       if (!forest_.is_leaf(c)) continue;
       if (!owned.contains(forest_.coarse_cell(c))) continue;
       leaf(c);
     }
+    advance(progress, cells, cells);
     return std::move(out_);
   }
 
@@ -253,8 +256,9 @@ class Subdivider {
 }  // namespace
 
 Triangles2 subdivide2(const geometry::Oracle2& oracle, const samr::RefinedGrid2& grid,
-                      const radapt::Nodes2& nodes, const grid::CellRange<2>& owned, double collapse_fraction) {
-  return Subdivider(oracle, grid, nodes, collapse_fraction).run(owned);
+                      const radapt::Nodes2& nodes, const grid::CellRange<2>& owned, double collapse_fraction,
+                      Progress* progress) {
+  return Subdivider(oracle, grid, nodes, collapse_fraction).run(owned, progress);
 }
 
 }  // namespace cisamr::subdivide

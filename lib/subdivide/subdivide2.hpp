@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/progress.hpp"
 #include "geometry/oracle.hpp"
 #include "grid/lattice.hpp"
 #include "radapt/radapt2.hpp"
@@ -34,8 +35,9 @@ struct Triangles2 {
 };
 
 // Triangulates the leaves whose coarse ancestor lies in `owned` (the partition box).
+// `progress` (may be null) is advanced over the forest's cells.
 Triangles2 subdivide2(const geometry::Oracle2& oracle, const samr::RefinedGrid2& grid,
                       const radapt::Nodes2& nodes, const grid::CellRange<2>& owned,
-                      double collapse_fraction = 0.5);
+                      double collapse_fraction = 0.5, Progress* progress = nullptr);
 
 }  // namespace cisamr::subdivide

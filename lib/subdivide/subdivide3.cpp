@@ -23,12 +23,15 @@ class Subdivider3 {
               const faceswap::Swaps3* swaps)
       : oracle_(oracle), g_(g), forest_(g.forest), nodes_(nodes), swaps_(swaps), edge_point_(nodes.edges.size(), -1) {}
 
-  Tets3 run(const grid::CellRange<3>& owned) {
+  Tets3 run(const grid::CellRange<3>& owned, Progress* progress) {
+    const auto tets = static_cast<std::int64_t>(forest_.size());
     for (std::int32_t t = 0; t < static_cast<std::int32_t>(forest_.size()); ++t) {
+      advance_sometimes(progress, t, tets);
       if (!forest_.is_leaf(t)) continue;
       if (!owned.contains(forest_.coarse_cell(t))) continue;
       leaf(t);
     }
+    advance(progress, tets, tets);
     return std::move(out_);
   }
 
@@ -248,8 +251,9 @@ class Subdivider3 {
 }  // namespace
 
 Tets3 subdivide3(const geometry::Oracle3& oracle, const samr::RefinedGrid3& grid, const radapt::Nodes3& nodes,
-                 const grid::CellRange<3>& owned, const faceswap::Swaps3* swaps) {
-  return Subdivider3(oracle, grid, nodes, swaps).run(owned);
+                 const grid::CellRange<3>& owned, const faceswap::Swaps3* swaps,
+                 Progress* progress) {
+  return Subdivider3(oracle, grid, nodes, swaps).run(owned, progress);
 }
 
 }  // namespace cisamr::subdivide

@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/progress.hpp"
 #include "faceswap/faceswap3.hpp"
 #include "geometry/oracle.hpp"
 #include "grid/lattice.hpp"
@@ -48,8 +49,10 @@ struct Tets3 {
 };
 
 // Tetrahedralises the leaves whose coarse cube lies in `owned` (the partition box); cubes
-// that `swaps` re-tetrahedralised give their new tets instead of their leaves.
+// that `swaps` re-tetrahedralised give their new tets instead of their leaves. `progress`
+// (may be null) is advanced over the forest's tets.
 Tets3 subdivide3(const geometry::Oracle3& oracle, const samr::RefinedGrid3& grid, const radapt::Nodes3& nodes,
-                 const grid::CellRange<3>& owned, const faceswap::Swaps3* swaps = nullptr);
+                 const grid::CellRange<3>& owned, const faceswap::Swaps3* swaps = nullptr,
+                 Progress* progress = nullptr);
 
 }  // namespace cisamr::subdivide
