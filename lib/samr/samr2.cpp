@@ -137,7 +137,7 @@ RefinedGrid2 refine2(const geometry::Oracle2& oracle, const grid::Lattice2& latt
                      const grid::CellRange<2>& range, std::span<const int> levels, Progress* progress) {
   if (!levels.empty() && static_cast<int>(levels.size()) != oracle.inclusion_count())
     throw std::invalid_argument("refine2: one level per inclusion expected");
-  RefinedGrid2 g{{}, grid::QuadForest(lattice, range), {}, {}, 0};
+  RefinedGrid2 g{{}, grid::QuadForest(lattice, range), {}, 0};
   const std::int32_t roots = g.forest.root_count();
   const std::int64_t nx = range.count(0), ny = range.count(1);
 
@@ -170,19 +170,19 @@ RefinedGrid2 refine2(const geometry::Oracle2& oracle, const grid::Lattice2& latt
           }
       }
     }
-  g.root_candidate_begin.resize(static_cast<std::size_t>(roots) + 1);
+  g.root_candidates.begin.resize(static_cast<std::size_t>(roots) + 1);
   g.touch_begin.resize(static_cast<std::size_t>(roots));
   g.touch_count.resize(static_cast<std::size_t>(roots));
   for (std::int32_t r = 0; r < roots; ++r) {
     advance_sometimes(progress, r, 2 * std::int64_t{roots});  // as Refiner::run's
     auto& list = per_root[static_cast<std::size_t>(r)];
     std::sort(list.begin(), list.end());
-    g.root_candidate_begin[static_cast<std::size_t>(r)] = static_cast<std::int32_t>(g.root_candidates.size());
+    g.root_candidates.begin[static_cast<std::size_t>(r)] = static_cast<std::int32_t>(g.root_candidates.list.size());
     g.touch_begin[static_cast<std::size_t>(r)] = static_cast<std::int32_t>(g.touch_pool.size());
     const Box2 box = g.forest.box(r);
     std::uint16_t count = 0;
     for (std::int32_t k : list) {
-      g.root_candidates.push_back(k);
+      g.root_candidates.list.push_back(k);
       if (oracle.boundary_touches(k, box)) {
         g.touch_pool.push_back(k);
         ++count;
@@ -191,7 +191,7 @@ RefinedGrid2 refine2(const geometry::Oracle2& oracle, const grid::Lattice2& latt
     g.touch_count[static_cast<std::size_t>(r)] = count;
     std::vector<std::int32_t>().swap(list);
   }
-  g.root_candidate_begin[static_cast<std::size_t>(roots)] = static_cast<std::int32_t>(g.root_candidates.size());
+  g.root_candidates.begin[static_cast<std::size_t>(roots)] = static_cast<std::int32_t>(g.root_candidates.list.size());
 
   Refiner(oracle, g, levels).run(progress);
   return g;

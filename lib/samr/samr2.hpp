@@ -30,16 +30,10 @@ inline constexpr int kReachCells2 = 2;
 // Per cell (TouchLists): inclusions whose boundary meets the closed cell.
 struct RefinedGrid2 : TouchLists {
   grid::QuadForest forest;
-  // Per root: inclusions whose bounding box meets the closed root box (CSR).
-  std::vector<std::int32_t> root_candidate_begin;  // root_count + 1
-  std::vector<std::int32_t> root_candidates;
+  CellCandidates root_candidates;  // per root (root_count of them)
   std::int64_t refinements = 0;
 
-  std::span<const std::int32_t> candidates_of_root(std::int32_t root) const {
-    const auto b = static_cast<std::size_t>(root_candidate_begin[static_cast<std::size_t>(root)]);
-    const auto e = static_cast<std::size_t>(root_candidate_begin[static_cast<std::size_t>(root) + 1]);
-    return {root_candidates.data() + b, e - b};
-  }
+  std::span<const std::int32_t> candidates_of_root(std::int32_t root) const { return root_candidates.of(root); }
   // Root cell containing cell c.
   std::int32_t root_of(std::int32_t c) const {
     const auto coarse = forest.coarse_cell(c);

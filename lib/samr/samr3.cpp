@@ -349,9 +349,9 @@ RefinedGrid3 refine3(const geometry::Oracle3& oracle, const grid::Lattice3& latt
                      const grid::CellRange<3>& range, std::span<const int> levels, Progress* progress) {
   if (!levels.empty() && static_cast<int>(levels.size()) != oracle.inclusion_count())
     throw std::invalid_argument("refine3: one level per inclusion expected");
-  RefinedGrid3 g{{}, grid::TetForest(lattice, range), {}, {}, 0, 0};
+  RefinedGrid3 g{{}, grid::TetForest(lattice, range), {}, 0, 0};
   const std::int64_t cubes = range.count(0) * range.count(1) * range.count(2);
-  g.cube_candidate_begin.assign(static_cast<std::size_t>(cubes) + 1, 0);
+  g.cube_candidates.begin.assign(static_cast<std::size_t>(cubes) + 1, 0);
   // Candidates per coarse cube: one AABB-tree query per block of cubes, then the same
   // closed-box test per cube (the tree's), so the lists are those of one query per cube.
   const auto cube_box = [&](std::int64_t ci, std::int64_t cj, std::int64_t ck) {
@@ -381,17 +381,17 @@ RefinedGrid3 refine3(const geometry::Oracle3& oracle, const grid::Lattice3& latt
     for (std::int64_t ck = bk; ck < ek; ++ck)
       for (std::int64_t cj = range.lo[1]; cj < range.hi[1]; ++cj)
         for (std::int64_t ci = range.lo[0]; ci < range.hi[0]; ++ci) {
-          g.cube_candidate_begin[static_cast<std::size_t>(g.cube_index(ci, cj, ck))] =
-              static_cast<std::int32_t>(g.cube_candidates.size());
+          g.cube_candidates.begin[static_cast<std::size_t>(g.cube_index(ci, cj, ck))] =
+              static_cast<std::int32_t>(g.cube_candidates.list.size());
           const auto& found = block_candidates[static_cast<std::size_t>(
               (cj - range.lo[1]) / kCandidateBlock * blocks_x + (ci - range.lo[0]) / kCandidateBlock)];
           if (found.empty()) continue;
           const Box3 cube = cube_box(ci, cj, ck);
           for (std::int32_t k : found)
-            if (boxes_overlap(cube, oracle.bounding_box(k))) g.cube_candidates.push_back(k);
+            if (boxes_overlap(cube, oracle.bounding_box(k))) g.cube_candidates.list.push_back(k);
         }
   }
-  g.cube_candidate_begin[static_cast<std::size_t>(cubes)] = static_cast<std::int32_t>(g.cube_candidates.size());
+  g.cube_candidates.begin[static_cast<std::size_t>(cubes)] = static_cast<std::int32_t>(g.cube_candidates.list.size());
 
   const std::int32_t roots = g.forest.root_count();
   g.touch_begin.resize(static_cast<std::size_t>(roots));

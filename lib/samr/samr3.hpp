@@ -39,10 +39,7 @@ inline constexpr int kReachCoarseCells3 = 2;
 // Conservative: a tet with an empty list lies inside one phase.
 struct RefinedGrid3 : TouchLists {
   grid::TetForest forest;
-  // Per coarse cube of the range (x fastest): inclusions whose bounding box meets the
-  // closed cube (CSR).
-  std::vector<std::int32_t> cube_candidate_begin;  // cubes + 1
-  std::vector<std::int32_t> cube_candidates;
+  CellCandidates cube_candidates;  // per coarse cube of the range (cube_index)
   std::int64_t refinements = 0;
   int sweeps = 0;  // synchronous sweeps, the last one marking nothing
 
@@ -57,11 +54,7 @@ struct RefinedGrid3 : TouchLists {
     const auto coarse = forest.coarse_cell(t);
     return cube_index(coarse[0], coarse[1], coarse[2]);
   }
-  std::span<const std::int32_t> candidates_of_cube(std::int64_t cube) const {
-    const auto b = static_cast<std::size_t>(cube_candidate_begin[static_cast<std::size_t>(cube)]);
-    const auto e = static_cast<std::size_t>(cube_candidate_begin[static_cast<std::size_t>(cube) + 1]);
-    return {cube_candidates.data() + b, e - b};
-  }
+  std::span<const std::int32_t> candidates_of_cube(std::int64_t cube) const { return cube_candidates.of(cube); }
   std::span<const std::int32_t> candidates_of_tet(std::int32_t t) const { return candidates_of_cube(cube_of(t)); }
 
   // Closed axis-aligned bounding box of tet t, world coordinates.

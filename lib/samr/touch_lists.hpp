@@ -1,7 +1,8 @@
 #pragma once
 // What both dimensions' refined grids keep per forest cell: the inclusions whose boundary
 // may meet it (samr2.hpp, samr3.hpp say how closely), in an append-only pool where a
-// refined cell's children append the part of its list that still applies.
+// refined cell's children append the part of its list that still applies; and per coarse
+// cell of the range, the candidates the later stages ask the oracle about.
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -17,6 +18,19 @@ struct TouchLists {
     return {touch_pool.data() + touch_begin[static_cast<std::size_t>(c)], touch_count[static_cast<std::size_t>(c)]};
   }
   bool is_cut(std::int32_t c) const { return touch_count[static_cast<std::size_t>(c)] > 0; }
+};
+
+// Per coarse cell of the range (2D: the forest's roots; 3D: the cubes, x fastest): the
+// inclusions whose bounding box meets the closed cell, ascending (CSR).
+struct CellCandidates {
+  std::vector<std::int32_t> begin;  // cells + 1
+  std::vector<std::int32_t> list;
+
+  std::span<const std::int32_t> of(std::int64_t cell) const {
+    const auto b = static_cast<std::size_t>(begin[static_cast<std::size_t>(cell)]);
+    const auto e = static_cast<std::size_t>(begin[static_cast<std::size_t>(cell) + 1]);
+    return {list.data() + b, e - b};
+  }
 };
 
 }  // namespace cisamr::samr

@@ -154,13 +154,13 @@ class ReferenceRefiner {
 
 samr::RefinedGrid3 reference_refine3(const geometry::Oracle3& oracle, const grid::Lattice3& lattice,
                                      const grid::CellRange<3>& range, std::span<const int> levels) {
-  samr::RefinedGrid3 g{{}, grid::TetForest(lattice, range), {}, {}, 0, 0};
+  samr::RefinedGrid3 g{{}, grid::TetForest(lattice, range), {}, 0, 0};
   std::vector<std::int32_t> found;
   const double h = lattice.h;
   for (std::int64_t ck = range.lo[2]; ck < range.hi[2]; ++ck)
     for (std::int64_t cj = range.lo[1]; cj < range.hi[1]; ++cj)
       for (std::int64_t ci = range.lo[0]; ci < range.hi[0]; ++ci) {
-        g.cube_candidate_begin.push_back(static_cast<std::int32_t>(g.cube_candidates.size()));
+        g.cube_candidates.begin.push_back(static_cast<std::int32_t>(g.cube_candidates.list.size()));
         const std::array<std::int64_t, 3> c{ci, cj, ck};
         Box3 cube;
         for (int d = 0; d < 3; ++d) {
@@ -168,9 +168,9 @@ samr::RefinedGrid3 reference_refine3(const geometry::Oracle3& oracle, const grid
           cube.max[d] = lattice.origin[d] + static_cast<double>(c[d] + 1) * h;
         }
         oracle.candidates(cube, found);
-        g.cube_candidates.insert(g.cube_candidates.end(), found.begin(), found.end());
+        g.cube_candidates.list.insert(g.cube_candidates.list.end(), found.begin(), found.end());
       }
-  g.cube_candidate_begin.push_back(static_cast<std::int32_t>(g.cube_candidates.size()));
+  g.cube_candidates.begin.push_back(static_cast<std::int32_t>(g.cube_candidates.list.size()));
   for (std::int32_t r = 0; r < g.forest.root_count(); ++r) {
     g.touch_begin.push_back(static_cast<std::int32_t>(g.touch_pool.size()));
     std::uint16_t n = 0;
@@ -377,8 +377,8 @@ void expect_same_as_reference(const geometry::Oracle3& oracle, const grid::Latti
   const auto fast = samr::refine3(oracle, lattice, range, levels);
   const auto reference = reference_refine3(oracle, lattice, range, levels);
   EXPECT_EQ(leaf_set(fast.forest), leaf_set(reference.forest));
-  EXPECT_EQ(fast.cube_candidate_begin, reference.cube_candidate_begin);
-  EXPECT_EQ(fast.cube_candidates, reference.cube_candidates);
+  EXPECT_EQ(fast.cube_candidates.begin, reference.cube_candidates.begin);
+  EXPECT_EQ(fast.cube_candidates.list, reference.cube_candidates.list);
   EXPECT_EQ(fast.refinements, reference.refinements);
   EXPECT_EQ(fast.sweeps, reference.sweeps);
   // The forest arrays and cut lists are the same too (a sweep refines its marked leaves in
