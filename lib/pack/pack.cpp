@@ -7,9 +7,12 @@
 //                   closer than the gap, so disjoint covers prove separation cheaply;
 //   exact         = analytic distance (circle/sphere pairs, parallel fibres) or GJK on
 //                   support functions (convex_within), conservative near ties.
+#include <unistd.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <numeric>
 
 #include "core/error.hpp"
@@ -24,6 +27,16 @@ namespace {
 using namespace geometry;
 
 double sq(double x) { return x * x; }
+
+// What one particle costs while packing (its template, placement record and grid entries;
+// about 650 bytes measured for circles), rounded up.
+constexpr double kBytesPerParticle = 1000;
+
+std::string about(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.2g", value);
+  return text;
+}
 
 struct Template {
   int population = 0;
@@ -682,6 +695,23 @@ PackResult Packer::run() {
   for (std::size_t i = 0; i < spec_.populations.size(); ++i) setup_population(i);
   for (const auto& p : spec_.populations) gap_max_ = std::max(gap_max_, p.min_gap);
 
+  // 0. Requests the machine cannot hold are refused before any particle is drawn (counts of
+  // 1e7 and more ran out of memory drawing their templates).
+  const double memory = static_cast<double>(sysconf(_SC_PHYS_PAGES)) * static_cast<double>(sysconf(_SC_PAGE_SIZE));
+  const double particle_limit = spec_.max_particles > 0 ? static_cast<double>(spec_.max_particles)
+                                                        : std::max(memory / kBytesPerParticle, 1e6);
+  const std::string limit_text =
+      spec_.max_particles > 0 ? "the limit of " + about(particle_limit)
+                              : "the " + about(particle_limit) + " this machine's " + about(memory / 1e9) + " GB of memory holds";
+  double counted = 0;
+  for (const auto& p : spec_.populations) {
+    if (!p.count) continue;
+    counted += static_cast<double>(*p.count);
+    if (counted > particle_limit)
+      fail(p.field + ".count", "the pack would hold about " + about(counted) + " particles (about " +
+                                   about(counted * kBytesPerParticle / 1e9) + " GB), more than " + limit_text);
+  }
+
   // 1. Templates of the non-overlapping populations: sizes and shapes drawn up front.
   std::vector<int> order;
   for (std::size_t pi = 0; pi < pops_.size(); ++pi) {
@@ -690,7 +720,17 @@ PackResult Packer::run() {
     if (p.overlap) continue;
     const std::size_t first = templates_.size();
     if (p.count) {
-      for (std::int64_t k = 0; k < *p.count; ++k) templates_.push_back(make_template(static_cast<int>(pi)));
+      // Non-overlapping particles inside their region cannot measure more than it: stop
+      // drawing as soon as the drawn ones do (sizes scaled to a fraction always fit).
+      double drawn = 0;
+      for (std::int64_t k = 0; k < *p.count; ++k) {
+        templates_.push_back(make_template(static_cast<int>(pi)));
+        drawn += templates_.back().measure;
+        if (!p.volume_fraction && drawn > s.region_measure)
+          fail(p.field + ".count", "cannot place " + std::to_string(*p.count) + " particles: the first " +
+                                       std::to_string(k + 1) + " drawn already measure " + about(drawn) +
+                                       ", more than their region's " + about(s.region_measure));
+      }
       if (p.volume_fraction && *p.count > 0) {  // scale the sizes so both targets hold
         double sum = 0;
         for (std::size_t k = first; k < templates_.size(); ++k) sum += templates_[k].measure;
@@ -708,8 +748,9 @@ PackResult Packer::run() {
       while (sum < target) {
         templates_.push_back(make_template(static_cast<int>(pi)));
         sum += templates_.back().measure;
-        if (templates_.size() - first > 50'000'000)
-          fail(p.field + ".size", "sizes too small for the volume fraction (over 5e7 particles)");
+        if (static_cast<double>(templates_.size() - first) + counted > std::min(particle_limit, 5e7))
+          fail(p.field + ".size", "sizes too small for the volume fraction (over " +
+                                      about(std::min(particle_limit, 5e7)) + " particles in all)");
       }
     }
     for (std::size_t k = first; k < templates_.size(); ++k) order.push_back(static_cast<int>(k));

@@ -76,6 +76,9 @@ struct PackSpec {
   int matrix_phase = 1;
   std::int64_t max_trials = 5000;    // random placement trials per particle
   std::int64_t max_failures = 200;   // particles that may fail before giving up
+  // Particles the run may hold (not read from JSON; 0: what this machine's memory holds at
+  // about 1 KB per particle). A request beyond it is refused before any particle is drawn.
+  std::int64_t max_particles = 0;
   std::vector<Population> populations;
 };
 

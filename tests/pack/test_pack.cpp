@@ -2,6 +2,7 @@
 // fraction targets, determinism, periodic images, error paths.
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -392,6 +393,36 @@ TEST(PackSpec, TrialsAndCountsAreBounded) {
             std::string::npos);
   EXPECT_NE(problem_of(spec2d(R"({"shape": "circle", "count": 1000000000000, "size": 1})")).find("count: must be between 0 and"),
             std::string::npos);
+}
+
+TEST(PackSpec, CountsTheRegionOrTheMachineCannotHoldAreRefusedBeforeDrawing) {
+  auto refusal = [](const pack::PackSpec& spec) -> std::string {
+    try {
+      pack::pack(spec);
+    } catch (const InputError& e) {
+      return e.what();
+    }
+    return "no error";
+  };
+  // 10^7 circles of radius 1 in a 100 x 100 square (allowed by the count bound of 10^8):
+  // all 10^7 templates were drawn first (about 7 GB) before the first placement failed.
+  const auto start = std::chrono::steady_clock::now();
+  const std::string full =
+      refusal(pack::parse_pack_spec(spec2d(R"({"shape": "circle", "count": 10000000, "size": 1})"), "test.json"));
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 5.0);
+  EXPECT_NE(full.find("test.json: populations[0].count: cannot place 10000000 particles: the first "), std::string::npos)
+      << full;
+  EXPECT_NE(full.find("more than their region's 1e+04"), std::string::npos) << full;
+  // Tiny particles that fit by measure, but not in memory: refused up front with an estimate.
+  pack::PackSpec tiny = pack::parse_pack_spec(
+      spec2d(R"({"shape": "circle", "count": 60000000, "size": 0.001}, {"shape": "circle", "count": 50000000, "size": 0.001})"),
+      "test.json");
+  tiny.max_particles = 100'000'000;
+  const std::string memory = refusal(tiny);
+  EXPECT_NE(memory.find("test.json: populations[1].count: the pack would hold about 1.1e+08 particles (about 1.1e+02 GB), "
+                        "more than the limit of 1e+08"),
+            std::string::npos)
+      << memory;
 }
 
 TEST(PackSpec, TinyParticlesInAHugeDomainKeepTheSearchGridSmall) {
