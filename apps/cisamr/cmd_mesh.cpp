@@ -1,7 +1,6 @@
 // cisamr mesh: parses the options, meshes through driver::mesh_scene (sequential, or the
-// parallel mesher with --partitions N or under mpiexec), writes, prints. Every rank runs all
-// of this; only rank 0 prints and writes the report.
-#include <algorithm>
+// parallel mesher with --partitions N or under mpiexec), writes, prints (mesh_summary.cpp).
+// Every rank runs all of this; only rank 0 prints and writes the report.
 #include <cstdio>
 #include <memory>
 #include <optional>
@@ -11,6 +10,7 @@
 #include <unistd.h>
 
 #include "commands.hpp"
+#include "mesh_summary.hpp"
 #include "progress_line.hpp"
 #include "driver/driver.hpp"
 #include "io/atomic_file.hpp"
@@ -29,58 +29,6 @@ struct MeshArgs {
   bool fixed_ghost = false;  // the fixed 3-cell inclusion margin instead of the level-aware one
   driver::Options options;
 };
-
-template <int Dim>
-void print_summary(std::FILE* out, const driver::MeshRun<Dim>& run, const driver::Output& output,
-                   const GlobalFlags& flags) {
-  const pipeline::Counters<Dim>& counters = run.mesh.counters;
-  if (!flags.quiet) {
-    std::fprintf(out, "%s: %lld nodes, %lld %s, max aspect ratio %.3f (bound %.1f, %zu above), %.3f s", output.path.c_str(),
-                static_cast<long long>(run.mesh.piece.global_nodes), static_cast<long long>(run.mesh.global_cells),
-                Dim == 2 ? "triangles" : "tetrahedra", run.aspect.max, run.bound, run.aspect.above_bound,
-                run.total_seconds);
-    if (run.distributed) std::fprintf(out, ", %d rank(s), %zu partitions", run.ranks, run.mesh.partitions.size());
-    std::fprintf(out, "\n");
-    if constexpr (Dim == 2) {
-      if (counters.collapsed > 0)
-        std::fprintf(out, "%lld quads held a feature below the local resolution (a tangency, a thin gap or a wedge "
-                    "sharper than the bound allows); collapsed with nodes at most %.3g from the phases they serve\n",
-                    static_cast<long long>(counters.collapsed), counters.max_collapse_deviation);
-    } else if (counters.collapsed_nodes + counters.collapsed_cut_points > 0) {
-      std::fprintf(out, "%lld nodes could neither stay nor snap without a tetrahedron above the bound (a tangency, a "
-                  "thin gap or a wedge at the domain boundary); collapsed onto the interface, at most %.3g from "
-                  "the phases they serve\n",
-                  static_cast<long long>(counters.collapsed_nodes), counters.max_collapse_deviation);
-    }
-  }
-  if (flags.verbose) {
-    if (run.distributed)
-      std::fprintf(out, "  %-10s %9s %9s %9s   (seconds over %d rank(s))\n", "phase", "min", "max", "mean", run.ranks);
-    for (const auto& s : run.timings)
-      if (run.distributed)
-        std::fprintf(out, "  %-10s %9.3f %9.3f %9.3f\n", s.name.c_str(), s.min, s.max, s.mean);
-      else
-        std::fprintf(out, "  %-10s %8.3f s\n", s.name.c_str(), s.max);
-    if (run.distributed) {
-      double max_load = 0, sum_load = 0;
-      for (const auto& p : run.mesh.partitions) max_load = std::max(max_load, p.load), sum_load += p.load;
-      const double mean_load = sum_load / static_cast<double>(run.mesh.partitions.size());
-      std::fprintf(out, "  partition loads: max %.4g, mean %.4g, imbalance %.3f (%s)\n", max_load, mean_load,
-                  mean_load > 0 ? max_load / mean_load : 1.0, run.mesh.partition_method.c_str());
-      for (const auto& p : run.mesh.partitions) {
-        std::fprintf(out, "  part %3d rank %2d cells ", p.id, p.rank);
-        for (int d = 0; d < Dim; ++d)
-          std::fprintf(out, "%s[%lld,%lld)", d ? "x" : "", static_cast<long long>(p.lattice_min[d]),
-                      static_cast<long long>(p.lattice_max[d]));
-        std::fprintf(out, " load %10.4g elements %9lld ghost %3d inclusions %6lld kernel %.3f s\n", p.load,
-                    static_cast<long long>(p.elements), p.ghost, static_cast<long long>(p.inclusions), p.kernel_seconds);
-      }
-    }
-  }
-  if (counters.unresolved > 0)
-    std::fprintf(stderr, "cisamr: warning: %lld %s below the finest level's resolution\n",
-                 static_cast<long long>(counters.unresolved), Dim == 2 ? "quads" : "leaves");
-}
 
 void run_mesh(MeshArgs& args, const GlobalFlags& flags, int& exit_code) {
   const Comm& comm = parallel::world();
@@ -119,7 +67,7 @@ void run_mesh(MeshArgs& args, const GlobalFlags& flags, int& exit_code) {
         // Data on standard output: the summary goes to stderr.
         const bool data_on_stdout = io::is_standard_output(args.report) || io::is_standard_output(output.path);
         if (progress) progress->finish();
-        if (comm.rank() == 0) print_summary(data_on_stdout ? stderr : stdout, run, output, flags);
+        if (comm.rank() == 0) print_mesh_summary(data_on_stdout ? stderr : stdout, run, output, flags);
         exit_code = run.aspect.above_bound > 0 ? 3 : 0;
       },
       meshed);
