@@ -11,9 +11,11 @@
 #include "commands.hpp"
 #include "core/error.hpp"
 #include "core/timer.hpp"
+#include "geometry/periodic.hpp"
 #include "geometry/scene.hpp"
 #include "io/mesh_io.hpp"
 #include "io/scene_io.hpp"
+#include "pipeline/pipeline.hpp"
 #include "quality/certificate.hpp"
 #include "quality/phase_match.hpp"
 
@@ -50,7 +52,8 @@ quality::Certificate certify_mesh(const mesh::SimplexMesh<Dim>& mesh, const geom
   progress(flags, "building the geometry oracle");
   const geometry::Oracle<Dim> oracle = [&] {
     ScopedPhase timer(&times, "oracle");
-    return geometry::Oracle<Dim>(*scene);
+    // A periodic scene's geometry wraps: the images that enter the domain count.
+    return geometry::Oracle<Dim>(geometry::expand_periodic(*scene, pipeline::periodic_reach(*scene)));
   }();
   ScopedPhase timer(&times, "certify");
   progress(flags, "checking the mesh against the scene");

@@ -109,7 +109,7 @@ Vec3 body_point(const Body& b, const Vec3& unit) {
 }
 
 void check_scene(const geometry::SceneDesc& scene, const std::vector<Body>& bodies) {
-  if (scene.periodic)
+  if (scene.any_periodic())
     throw InputError(scene.source, "domain.periodic", "the TetGen reference does not mesh periodic scenes");
   for (std::size_t i = 0; i < bodies.size(); ++i) {
     const Body& b = bodies[i];

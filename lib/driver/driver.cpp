@@ -11,6 +11,7 @@
 
 #include "core/error.hpp"
 #include "geometry/oracle.hpp"
+#include "geometry/periodic.hpp"
 #include "io/mesh_io.hpp"
 #include "io/mesh_svg.hpp"
 #include "io/scene_io.hpp"
@@ -90,7 +91,8 @@ template <int Dim>
 void mesh_sequential(const Comm& comm, const geometry::SceneDesc& scene, MeshRun<Dim>& run) {
   using Oracle = geometry::Oracle<Dim>;
   tell(run.options, "oracle");
-  const Oracle oracle(scene);
+  // A periodic scene's oracle holds the images that wrap into the domain (geometry/periodic.hpp).
+  const Oracle oracle(geometry::expand_periodic(scene, pipeline::periodic_reach(scene)));
   pipeline::Result<Dim> result = pipeline::mesh(oracle, run.options.pipeline);
   parallel::DistributedMesh<Dim>& m = run.mesh;
   m.piece.mesh = std::move(result.mesh);

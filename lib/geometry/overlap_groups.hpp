@@ -27,8 +27,11 @@ void group_overlapping_inclusions(Impl& m) {
   for (auto [i, j] : pairs) {
     if (m.items[i].phase != m.items[j].phase) {
       if (m.regions_intersect(i, j, true))
-        throw InputError(m.scene.source, inclusion_field(static_cast<std::size_t>(j)),
-                         "overlaps " + inclusion_field(static_cast<std::size_t>(i)) + ", which has a different phase");
+        throw InputError(m.scene.source, inclusion_field(m.scene.listed(static_cast<std::size_t>(j))),
+                         (m.scene.listed(static_cast<std::size_t>(j)) == static_cast<std::size_t>(j)
+                              ? std::string("overlaps ")
+                              : inclusion_name(m.scene, static_cast<std::size_t>(j)) + " overlaps ") +
+                             inclusion_name(m.scene, static_cast<std::size_t>(i)) + ", which has a different phase");
     } else if (m.regions_intersect(i, j, false)) {
       const std::int32_t ri = find(i), rj = find(j);
       if (ri != rj) parent[std::max(ri, rj)] = std::min(ri, rj);

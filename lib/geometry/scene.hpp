@@ -2,6 +2,8 @@
 // The scene description (DESIGN.md §5) as plain data: what io reads and pack writes.
 // No geometry is evaluated here; see oracle.hpp for the queries.
 #include <array>
+#include <cstdlib>
+#include <cstdint>
 #include <string>
 #include <variant>
 #include <vector>
@@ -91,12 +93,30 @@ struct SceneDesc {
   std::string source;  // file the scene came from, for error messages ("" if built in code)
   int dimension = 2;
   std::array<double, 3> domain_min{}, domain_max{};
-  bool periodic = false;
+  // Per axis: the domain is a period of the material along it (an inclusion crossing the
+  // face enters again from the opposite one). Only the first `dimension` entries count.
+  std::array<bool, 3> periodic{};
   double h = 1;    // background element size
   int levels = 0;  // default SAMR levels of an inclusion
   std::vector<Phase> phases;
   int matrix_phase = 1;
   std::vector<Inclusion> inclusions;
+
+  // Periodic images of inclusions (geometry::expand_periodic): image_base[k] is the listed
+  // inclusion that inclusion k is an image of (−1 for a listed one), image_shift[k] its
+  // shift in periods per axis. Empty for a scene as read.
+  std::vector<std::int32_t> image_base;
+  std::vector<std::array<std::int8_t, 3>> image_shift;
+
+  bool any_periodic() const {
+    for (int d = 0; d < dimension; ++d)
+      if (periodic[static_cast<std::size_t>(d)]) return true;
+    return false;
+  }
+  // The listed inclusion behind inclusion k (k itself unless k is an image).
+  std::size_t listed(std::size_t k) const {
+    return k < image_base.size() && image_base[k] >= 0 ? static_cast<std::size_t>(image_base[k]) : k;
+  }
 
   // Index of the phase with this id in `phases`, or -1.
   int phase_index(int id) const {
@@ -108,5 +128,18 @@ struct SceneDesc {
 
 // Field path of inclusion i for error messages: "inclusions[i]".
 inline std::string inclusion_field(std::size_t i) { return "inclusions[" + std::to_string(i) + "]"; }
+
+// The same for inclusion k of a scene with periodic images: a listed inclusion by its field,
+// an image as "the periodic image (+x-y) of inclusions[i]".
+inline std::string inclusion_name(const SceneDesc& scene, std::size_t k) {
+  const std::size_t base = scene.listed(k);
+  if (base == k) return inclusion_field(k);
+  std::string shift;
+  for (int d = 0; d < 3; ++d) {
+    const int s = scene.image_shift[k][static_cast<std::size_t>(d)];
+    for (int i = 0; i < std::abs(s); ++i) shift += std::string(s > 0 ? "+" : "-") + "xyz"[d];
+  }
+  return "the periodic image (" + shift + ") of " + inclusion_field(base);
+}
 
 }  // namespace cisamr::geometry

@@ -30,6 +30,35 @@ struct Lattice {
   double h = 1;        // coarse cell size
   int max_level = 0;   // Lmax: finest level anywhere in the domain
   std::array<std::int64_t, Dim> coarse_cells{};  // whole domain, per axis
+  // Periodic axes (docs/periodic-design.md): the lattice is a torus along them. A lattice
+  // point exists once, under its canonical coordinate in [0, P) (P = fine_period(d)); a cell
+  // sees a neighbour across the period at canonical + P, and its position at + period(d).
+  std::array<bool, Dim> periodic{};
+
+  bool any_periodic() const {
+    for (int d = 0; d < Dim; ++d)
+      if (periodic[d]) return true;
+    return false;
+  }
+  // Fine-lattice units of the whole domain along d (the period on a periodic axis).
+  std::int64_t fine_period(int d) const { return coarse_cells[d] * units(0); }
+  // The period in world units: exactly coordinate(d, P) − origin's N·h, the one number added
+  // to a min-face coordinate to give the max face's.
+  double period(int d) const { return static_cast<double>(coarse_cells[d]) * h; }
+  // A fine coordinate reduced into [0, P) on a periodic axis; unchanged on the others.
+  std::int64_t canonical(int d, std::int64_t x) const {
+    if (!periodic[d]) return x;
+    const std::int64_t p = fine_period(d);
+    x %= p;
+    return x < 0 ? x + p : x;
+  }
+  // A cell index at `level` reduced into [0, N·2^level) on a periodic axis.
+  std::int64_t canonical_cell(int d, int level, std::int64_t i) const {
+    if (!periodic[d]) return i;
+    const std::int64_t n = coarse_cells[d] << level;
+    i %= n;
+    return i < 0 ? i + n : i;
+  }
 
   // h·2^-level, exactly (a power-of-two scaling), without a libm call in hot loops.
   double spacing(int level) const { return h / static_cast<double>(std::int64_t{1} << level); }

@@ -37,7 +37,12 @@ class QuadForest {
     return {x.i >> x.level, x.j >> x.level};
   }
   std::int32_t root_count() const { return root_count_; }
-  // Root of global coarse cell (ci, cj), or -1 outside the range.
+  // Where the window holds coarse index c along d: c itself, or on a periodic axis the one
+  // image of c in [lo, lo + N).
+  std::int64_t window_position(int d, std::int64_t c) const;
+  // Root of global coarse cell (ci, cj), or -1 outside the range. On a periodic axis any
+  // image of the cell's index finds it.
+  // Cell indices are canonical: in [0, N·2^level) per axis; `find` takes any image.
   std::int32_t root(std::int64_t ci, std::int64_t cj) const;
 
   // The cell on the path to (level, i, j) with the largest level ≤ `level`: either a leaf

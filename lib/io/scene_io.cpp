@@ -446,7 +446,19 @@ SceneDesc SceneReader::scene(const json& root) const {
     else if (!(s.domain_max[d] - s.domain_min[d] >= kMinLength))
       fail(index("domain.max", d), "the extent " + number_text(s.domain_max[d] - s.domain_min[d]) +
                                        " is below the supported " + number_text(kMinLength));
-  if (const json* p = member(domain, "periodic")) s.periodic = boolean(*p, "domain.periodic");
+  if (const json* p = member(domain, "periodic")) {
+    // true/false for every axis, or one boolean per axis.
+    if (p->is_array()) {
+      if (static_cast<int>(p->size()) != dim)
+        fail("domain.periodic", "must be a boolean or an array of " + std::to_string(dim) + " booleans (got " +
+                                    std::to_string(p->size()) + " entries)");
+      for (int d = 0; d < dim; ++d)
+        s.periodic[static_cast<std::size_t>(d)] = boolean((*p)[static_cast<std::size_t>(d)], index("domain.periodic", d));
+    } else {
+      const bool all = boolean(*p, "domain.periodic");
+      for (int d = 0; d < dim; ++d) s.periodic[static_cast<std::size_t>(d)] = all;
+    }
+  }
 
   // mesh
   const json& mesh = required(root, "", "mesh");
@@ -787,7 +799,14 @@ std::string scene_to_json(const SceneDesc& scene, const std::string& destination
   ordered domain;
   domain["min"] = vec_json(scene.domain_min.data(), dim);
   domain["max"] = vec_json(scene.domain_max.data(), dim);
-  domain["periodic"] = scene.periodic;
+  bool all_same = true;
+  for (int d = 1; d < dim; ++d) all_same &= scene.periodic[static_cast<std::size_t>(d)] == scene.periodic[0];
+  if (all_same) {
+    domain["periodic"] = scene.periodic[0];
+  } else {
+    domain["periodic"] = ordered::array();
+    for (int d = 0; d < dim; ++d) domain["periodic"].push_back(scene.periodic[static_cast<std::size_t>(d)]);
+  }
   root["domain"] = std::move(domain);
   ordered mesh;
   mesh["h"] = scene.h;

@@ -830,7 +830,7 @@ PackResult Packer::run() {
   scene.domain_min = spec_.domain.min;
   scene.domain_max = spec_.domain.max;
   if (dim_ == 2) scene.domain_min[2] = scene.domain_max[2] = 0;
-  scene.periodic = spec_.periodic;
+  scene.periodic = {spec_.periodic, spec_.periodic, dim_ == 3 && spec_.periodic};
   scene.h = spec_.h;
   scene.levels = spec_.levels;
   scene.phases = spec_.phases;

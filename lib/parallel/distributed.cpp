@@ -13,6 +13,7 @@
 #include "io/scene_io.hpp"
 #include "parallel/collective.hpp"
 #include "parallel/exchange.hpp"
+#include "geometry/periodic.hpp"
 #include "pipeline/effective_levels.hpp"
 
 namespace cisamr::parallel {
@@ -223,6 +224,12 @@ int rank_of_partition(int partition, int partitions, int ranks) {
   return r;
 }
 
+// Builds the lattice only to refuse a scene it cannot serve (a 3D periodic one) up front.
+template <int Dim>
+void lattice_check(const geometry::SceneDesc& scene, const pipeline::Options& options) {
+  (void)scene_lattice<Dim>(scene, options);
+}
+
 template <int Dim>
 DistributedMesh<Dim> mesh_distributed(const Comm& comm, const std::string& scene_path, const MeshOptions& options) {
   const auto start = std::chrono::steady_clock::now();
@@ -297,6 +304,17 @@ DistributedMesh<Dim> mesh_distributed(const Comm& comm, geometry::SceneDesc scen
     });
   }
 
+  // A periodic scene: the partitions tile the domain as it is (their loads wrap); the kernel
+  // meshes the torus and needs the images of inclusions near the faces (geometry/periodic.hpp).
+  std::vector<Box3> expanded_known;
+  if (scene.any_periodic())
+    run_collectively(comm, [&] {
+      lattice_check<Dim>(scene, options.pipeline);
+      scene = geometry::expand_periodic(scene, pipeline::periodic_reach(scene), known);
+      expanded_known = geometry::expanded_boxes(scene, known);
+    });
+  const std::vector<Box3>& known_boxes = scene.image_base.empty() ? known : expanded_known;
+
   // Ghost regions of this rank's partitions, and the inclusions they need.
   const auto [first, last] = partitions_of_rank(n, ranks, rank);
   grid::Lattice<Dim> lattice;
@@ -306,7 +324,7 @@ DistributedMesh<Dim> mesh_distributed(const Comm& comm, geometry::SceneDesc scen
     ScopedPhase timer(&out.times, "ghost");
     run_collectively(comm, [&] {
       lattice = scene_lattice<Dim>(scene, options.pipeline);
-      const std::vector<Box3> holding = pipeline::holding_boxes(scene, known);
+      const std::vector<Box3> holding = pipeline::holding_boxes(scene, known_boxes);
       // Every rank computes the same levels from the whole scene's descriptors (cheap:
       // pairs of nearby inclusions); they make SAMR local, so the ghost stays small.
       if constexpr (Dim == 2)

@@ -139,17 +139,55 @@ GhostRegion<Dim> grow(const InclusionIndex<Dim>& index, const grid::Lattice<Dim>
   }
   region.inclusions = std::move(queue);
   std::sort(region.inclusions.begin(), region.inclusions.end());
-  // Coarse cells covering the hull, clipped to the domain.
+  // Coarse cells covering the hull, clipped to the domain (on a periodic axis: to one period
+  // around the box, the window wrapping across the faces).
   for (int d = 0; d < Dim; ++d) {
     const double lo = std::floor((hull.min[d] - lattice.origin[d]) / h);
     const double hi = std::ceil((hull.max[d] - lattice.origin[d]) / h);
     const auto cells = static_cast<double>(lattice.coarse_cells[d]);
-    region.range.lo[d] = static_cast<std::int64_t>(std::clamp(lo, 0.0, cells));
-    region.range.hi[d] = static_cast<std::int64_t>(std::clamp(hi, 0.0, cells));
+    const double low = lattice.periodic[d] ? static_cast<double>(box.lo[d]) - cells : 0.0;
+    const double high = lattice.periodic[d] ? static_cast<double>(box.hi[d]) + cells : cells;
+    region.range.lo[d] = static_cast<std::int64_t>(std::clamp(lo, low, high));
+    region.range.hi[d] = static_cast<std::int64_t>(std::clamp(hi, low, high));
     region.range.lo[d] = std::min(region.range.lo[d], box.lo[d]);
     region.range.hi[d] = std::max(region.range.hi[d], box.hi[d]);
     region.ghost = static_cast<int>(std::max<std::int64_t>(
         region.ghost, std::max(box.lo[d] - region.range.lo[d], region.range.hi[d] - box.hi[d])));
+  }
+  if (lattice.any_periodic()) {
+    // The kernel evaluates every cell of the window in its canonical frame (inside the
+    // domain), so it needs the inclusions (listed or images) that meet the window's cells
+    // where they are, not where the unwrapped window lies: query the canonical pieces.
+    const grid::CellRange<Dim> window = pipeline::ghosted_range(lattice, box, region.ghost);
+    std::vector<std::array<std::int64_t, 2>> pieces[Dim];  // per axis, canonical [lo, hi)
+    for (int d = 0; d < Dim; ++d) {
+      const std::int64_t n = lattice.coarse_cells[d];
+      if (!lattice.periodic[d]) {
+        pieces[d].push_back({window.lo[d], window.hi[d]});
+        continue;
+      }
+      const std::int64_t lo = lattice.canonical_cell(d, 0, window.lo[d]);
+      const std::int64_t count = window.hi[d] - window.lo[d];
+      if (lo + count <= n) pieces[d].push_back({lo, lo + count});
+      else pieces[d].push_back({lo, n}), pieces[d].push_back({0, lo + count - n});
+    }
+    std::vector<std::int32_t> inclusions;
+    std::array<std::size_t, Dim> at{};
+    while (true) {
+      Box<Dim> piece;
+      for (int d = 0; d < Dim; ++d) {
+        piece.min[d] = lattice.origin[d] + static_cast<double>(pieces[d][at[d]][0]) * h;
+        piece.max[d] = lattice.origin[d] + static_cast<double>(pieces[d][at[d]][1]) * h;
+      }
+      index.query(piece, found);
+      inclusions.insert(inclusions.end(), found.begin(), found.end());
+      int d = 0;
+      while (d < Dim && ++at[d] == pieces[d].size()) at[d] = 0, ++d;
+      if (d == Dim) break;
+    }
+    std::sort(inclusions.begin(), inclusions.end());
+    inclusions.erase(std::unique(inclusions.begin(), inclusions.end()), inclusions.end());
+    region.inclusions = std::move(inclusions);
   }
   return region;
 }

@@ -33,7 +33,7 @@ class Accumulator {
     for (int d = 0; d < f_.dim; ++d) {
       const double L = f_.domain.max[d] - f_.domain.min[d];
       double t = x[d] - f_.domain.min[d];
-      if (f_.periodic) {
+      if (f_.periodic[static_cast<std::size_t>(d)]) {
         t = std::fmod(t, L);
         if (t < 0) t += L;
       } else if (t < 0 || t > L) {
@@ -66,7 +66,7 @@ class Accumulator {
     const double r = c.radius;
     for (int d = 0; d < 2; ++d) {
       const double L = f_.domain.max[d] - f_.domain.min[d];
-      const int copies = f_.periodic ? 1 : 0;
+      const int copies = f_.periodic[static_cast<std::size_t>(d)] ? 1 : 0;
       for (int m = -copies; m <= copies; ++m)
         for (std::int64_t i = 0; i <= f_.n[d]; ++i) {
           const double line = f_.coordinate(d, i) + m * L;
@@ -134,7 +134,7 @@ void add_cylinder(Accumulator& acc, const Cylinder& cy, double weight, double sp
   // only if that plane does (the box's corners span the range of x·u), give or take rounding.
   std::int64_t first = 0, last = nt - 1;
   const LoadField& f = acc.field();
-  if (!f.periodic) {
+  if (!f.any_periodic()) {
     double lo = INFINITY, hi = -INFINITY;
     for (int corner = 0; corner < 8; ++corner) {
       double t = 0;
@@ -247,7 +247,7 @@ void add_inclusion(Accumulator& acc, const Inclusion& inc, double weight, double
   // Only what lies in a bounded domain counts: a surface that reaches out of it is
   // sampled there only, so that its cost follows the part inside.
   const LoadField& f = acc.field();
-  if (!f.periodic && !box_within(shape_bounding_box(inc.shape), f.domain)) {
+  if (!f.any_periodic() && !box_within(shape_bounding_box(inc.shape), f.domain)) {
     std::vector<Vec3> pts;
     std::vector<double> area;
     shape_boundary_samples_within(inc.shape, spacing, f.domain, pts, area);

@@ -17,7 +17,8 @@ struct LoadField {
   int dim = 2;
   Box3 domain{};
   double h = 1;
-  bool periodic = false;
+  std::array<bool, 3> periodic{};  // per axis
+  bool any_periodic() const { return periodic[0] || periodic[1] || periodic[2]; }
   double exponent = 1;
   std::array<std::int64_t, 3> lattice_cells{1, 1, 1};  // background cells per axis
   std::int64_t coarsen = 1;                             // raster cell = coarsen × h (last may be shorter)

@@ -13,6 +13,16 @@
 namespace cisamr::partition {
 namespace {
 
+// One boolean when every axis agrees (the scene's own form), else one per axis.
+nlohmann::json periodic_json(const std::array<bool, 3>& periodic, int dim) {
+  bool same = true;
+  for (int d = 1; d < dim; ++d) same &= periodic[static_cast<std::size_t>(d)] == periodic[0];
+  if (same) return periodic[0];
+  nlohmann::json axes = nlohmann::json::array();
+  for (int d = 0; d < dim; ++d) axes.push_back(periodic[static_cast<std::size_t>(d)]);
+  return axes;
+}
+
 using json = nlohmann::ordered_json;  // keys in the order written
 using namespace geometry;
 
@@ -154,7 +164,7 @@ std::string to_json(const Partition& p, const std::string& scene_path) {
   doc["scene"] = scene_path;
   doc["method"] = p.method;
   doc["dimension"] = dim;
-  doc["domain"] = {{"min", vec(p.domain.min, dim)}, {"max", vec(p.domain.max, dim)}, {"periodic", p.periodic}};
+  doc["domain"] = {{"min", vec(p.domain.min, dim)}, {"max", vec(p.domain.max, dim)}, {"periodic", periodic_json(p.periodic, dim)}};
   doc["h"] = p.h;
   doc["lattice_cells"] = ivec(p.cells, dim);
   doc["load_exponent"] = p.load_exponent;

@@ -321,7 +321,7 @@ Partition assemble(const LoadField& f, const geometry::SceneDesc& scene, std::ve
     for (const auto& b : p.parts) {
       for (int axis = 0; axis < f.dim; ++axis)
         for (int side : {-1, +1})
-          for (int wrap = 0; wrap < (f.periodic ? 2 : 1); ++wrap) {
+          for (int wrap = 0; wrap < (f.periodic[static_cast<std::size_t>(axis)] ? 2 : 1); ++wrap) {
             const std::int64_t mine = side > 0 ? a.lattice_max[axis] : a.lattice_min[axis];
             std::int64_t theirs = side > 0 ? b.lattice_min[axis] : b.lattice_max[axis];
             std::int64_t shift_cells = 0;
@@ -371,7 +371,7 @@ Partition assemble(const LoadField& f, const geometry::SceneDesc& scene, std::ve
           for (int sz = -1; sz <= 1 && !hit; ++sz) {
             const int s[3] = {sx, sy, f.dim == 3 ? sz : 0};
             if (f.dim == 2 && sz != 0) continue;
-            if (!f.periodic && (sx || sy || sz)) continue;
+            if ((sx && !f.periodic[0]) || (sy && !f.periodic[1]) || (sz && !f.periodic[2])) continue;
             bool meets = true;
             for (int d = 0; d < f.dim; ++d) {
               const double L = f.domain.max[d] - f.domain.min[d];

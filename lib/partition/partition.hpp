@@ -52,7 +52,7 @@ struct Partition {
   Box3 domain{};
   double h = 1;
   std::array<std::int64_t, 3> cells{};  // background cells per axis
-  bool periodic = false;
+  std::array<bool, 3> periodic{};  // per axis
   double load_exponent = 1;
   double total_load = 0;
   std::array<int, 3> leaves{};          // over-decomposition that produced the result

@@ -11,10 +11,6 @@
 
 namespace cisamr::pipeline {
 
-// The coarse cells a kernel builds its forest on: `box` grown by `ghost` cells on each
-// side, clipped to the domain.
-template <int Dim>
-grid::CellRange<Dim> ghosted_range(const grid::Lattice<Dim>& lattice, const grid::CellRange<Dim>& box, int ghost);
 
 // What the mesh is made of once the stages are done (their working state released): the
 // lattice nodes, the points subdivision added (node ids follow the lattice nodes'), and

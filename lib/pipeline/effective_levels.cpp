@@ -130,6 +130,10 @@ std::vector<int> effective_levels(const geometry::SceneDesc& scene, const grid::
       }
     });
   }
+  // A periodic image is its inclusion seen across the period: one interface, one level.
+  for (std::size_t k = 0; k < n; ++k)
+    if (const std::size_t base = scene.listed(k); base != k)
+      pairs.push_back({static_cast<std::int32_t>(base), static_cast<std::int32_t>(k), true});
   // Contacts (R2), at the initial levels: the first level whose cells cannot touch both.
   for (const Pair& p : pairs) {
     if (p.union_of_one_phase) continue;

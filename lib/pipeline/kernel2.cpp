@@ -39,8 +39,9 @@ MeshParts<2> run_stages(const geometry::Oracle2& oracle, const grid::Lattice2& l
   counters.max_collapse_ratio = tris.max_collapse_ratio;
   counters.min_collapse_level = tris.collapsed ? tris.min_collapse_level : -1;
   counters.max_level = lattice.max_level;
-  return {std::move(nodes.key),          std::move(nodes.position), std::move(tris.extra_points), {},
-          std::move(tris.triangles),     std::move(tris.phase)};
+  static_assert(subdivide::Triangles2::kNoKey == Result<2>::kUnshared);
+  return {std::move(nodes.key),          std::move(nodes.position), std::move(tris.extra_points),
+          std::move(tris.extra_identity), std::move(tris.triangles),     std::move(tris.phase)};
 }
 
 }  // namespace cisamr::pipeline

@@ -23,7 +23,16 @@ grid::Lattice<Dim> make_lattice(const geometry::SceneDesc& scene, const Options&
     const double cells = (scene.domain_max[axis] - scene.domain_min[axis]) / scene.h;
     lattice.coarse_cells[d] = static_cast<std::int64_t>(std::llround(cells));
     if (lattice.coarse_cells[d] < 1) throw InputError(scene.source, "mesh.h", "larger than the domain");
+    lattice.periodic[d] = scene.periodic[axis];
+    // A node and its images across the period must be distinct lattice points of a cell.
+    if (lattice.periodic[d] && lattice.coarse_cells[d] < 2)
+      throw InputError(scene.source, "mesh.h",
+                       std::string("a periodic axis needs at least 2 cells of h; ") + "xyz"[d] + " has 1");
   }
+  if constexpr (Dim == 3)
+    if (lattice.any_periodic())
+      throw InputError(scene.source, "domain.periodic",
+                       "periodic meshes are made in 2D only so far; a 3D scene must have periodic: false");
   if constexpr (Dim == 3) grid::require_key3(lattice);
   return lattice;
 }
@@ -60,6 +69,12 @@ template <int Dim>
 grid::CellRange<Dim> ghosted_range(const grid::Lattice<Dim>& lattice, const grid::CellRange<Dim>& box, int ghost) {
   grid::CellRange<Dim> range = box;
   for (int d = 0; d < Dim; ++d) {
+    if (lattice.periodic[d]) {  // the ghost wraps around the period (the forest takes it so)
+      range.lo[d] = box.lo[d] - ghost;
+      range.hi[d] = box.hi[d] + ghost;
+      if (range.hi[d] - range.lo[d] >= lattice.coarse_cells[d]) range.lo[d] = 0, range.hi[d] = lattice.coarse_cells[d];
+      continue;
+    }
     range.lo[d] = std::max<std::int64_t>(0, box.lo[d] - ghost);
     range.hi[d] = std::min<std::int64_t>(lattice.coarse_cells[d], box.hi[d] + ghost);
   }

@@ -67,6 +67,17 @@ struct Result {
 template <int Dim>
 grid::Lattice<Dim> make_lattice(const geometry::SceneDesc& scene, const Options& options);
 
+// The coarse cells a kernel builds its forest on: `box` grown by `ghost` cells on each
+// side, clipped to the domain; on a periodic axis not clipped but wrapping (the whole
+// period once it spans it).
+template <int Dim>
+grid::CellRange<Dim> ghosted_range(const grid::Lattice<Dim>& lattice, const grid::CellRange<Dim>& box, int ghost);
+
+// How far beyond a periodic face the kernel needs the images of inclusions
+// (geometry::expand_periodic): the reach of the effective-level rules at the coarsest
+// level and a margin. Every stage evaluates a cell in its canonical frame, inside the domain.
+inline double periodic_reach(const geometry::SceneDesc& scene) { return 10 * scene.h; }
+
 // A rough count of the elements a scene's mesh will have, before any memory is taken: the
 // background cells, and per inclusion a band along its interface at its requested level
 // (the interface's size taken from its box clipped to the domain; an STL surface whose

@@ -295,6 +295,13 @@ std::string certificate_json(const Certificate& c) {
   } else {
     j["fidelity"] = nullptr;
   }
+  if (c.periodic) {
+    Json per = Json::array();
+    for (const PeriodicAxisReport& a : c.periodic->axes)
+      per.push_back({{"axis", std::string(1, "xyz"[a.axis])}, {"min_facets", a.min_facets}, {"max_facets", a.max_facets},
+                     {"unmatched", a.unmatched}, {"near_face_nodes", a.near_face_nodes}});
+    j["periodic"] = {{"ok", c.periodic->ok}, {"axes", per}};
+  }
   j["notes"] = c.notes;
   return j.dump(2) + "\n";
 }
@@ -365,6 +372,8 @@ std::string certificate_html(const Certificate& c) {
   o << "</table>\n";
   examples_html(o, r.examples);
 
+  if (c.periodic)
+    o << "<h2>Periodicity</h2>\n<p>" << html_escape(periodic_summary(*c.periodic)) << "</p>\n";
   o << "<h2>Phase fidelity</h2>\n";
   if (c.fidelity) {
     const FidelityReport& f = *c.fidelity;
@@ -448,6 +457,7 @@ std::string certificate_summary(const Certificate& c) {
             << ", relative error " << num(f.relative_error[k], 3) << "\n";
       }
   }
+  if (c.periodic) o << "periodicity: " << periodic_summary(*c.periodic) << "\n";
   for (const auto& n : c.notes) o << "note: " << n << "\n";
   o << "certificate: " << (c.passed() ? "PASSED" : "FAILED") << "\n";
   return o.str();

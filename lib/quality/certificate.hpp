@@ -8,6 +8,7 @@
 #include <utility>
 #include <vector>
 
+#include "quality/periodic.hpp"
 #include "core/types.hpp"
 #include "mesh/simplex_mesh.hpp"
 #include "quality/quality.hpp"
@@ -43,11 +44,12 @@ struct Certificate {
   AspectStats aspect;
   ConformityReport conformity;
   std::optional<FidelityReport> fidelity;
+  std::optional<PeriodicReport> periodic;  // a periodic scene: its faces match (check_periodic)
   std::vector<std::string> notes;  // what was not checked and why
 
   bool quality_ok() const { return aspect.above_bound == 0; }
   bool passed() const {
-    return quality_ok() && conformity.ok && (!fidelity || fidelity->ok);
+    return quality_ok() && conformity.ok && (!fidelity || fidelity->ok) && (!periodic || periodic->ok);
   }
 };
 

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cstdio>
 
+#include "geometry/periodic.hpp"
 #include "quality/certificate.hpp"
 #include "quality/scene_queries.hpp"
 
@@ -53,6 +54,17 @@ Certificate certify(const mesh::SimplexMesh<Dim>& m, const geometry::Oracle<Dim>
   }
   const double tol = options.fidelity_tolerance >= 0 ? options.fidelity_tolerance : default_fidelity_tolerance(scene);
   c.fidelity = check_fidelity<Dim>(m, oracle, tol, exact);
+  if (scene.any_periodic()) {
+    // The faces where the mesher puts them: min, and min + N·h (the period) on a periodic axis.
+    Box<Dim> faces = domain;
+    std::array<bool, Dim> axes{};
+    const Vec3 period = geometry::periods(scene);
+    for (int d = 0; d < Dim; ++d) {
+      axes[static_cast<std::size_t>(d)] = scene.periodic[static_cast<std::size_t>(d)];
+      if (axes[static_cast<std::size_t>(d)]) faces.max[d] = faces.min[d] + period[d];
+    }
+    c.periodic = check_periodic<Dim>(m, faces, axes);
+  }
   return c;
 }
 

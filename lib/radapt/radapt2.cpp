@@ -24,12 +24,15 @@ Nodes2 snap2(const geometry::Oracle2& oracle, const samr::RefinedGrid2& g, const
     r.y0 = forest.range().lo[1];
     r.nx = forest.range().count(0);
     r.ny = forest.range().count(1);
+    r.period_x = lattice.periodic[0] ? lattice.coarse_cells[0] : 0;
+    r.period_y = lattice.periodic[1] ? lattice.coarse_cells[1] : 0;
     r.coarse.assign(static_cast<std::size_t>((r.nx + 1) * (r.ny + 1)), -1);
     r.fine = grid::KeyMap(forest.size() - static_cast<std::size_t>(forest.root_count()) + 16);
   }
   nodes.key.reserve(forest.size());
 
   const auto add_node = [&](std::int64_t x, std::int64_t y) -> std::int32_t {
+    x = lattice.canonical(0, x), y = lattice.canonical(1, y);
     bool inserted = false;
     const auto next = static_cast<std::int32_t>(nodes.key.size());
     std::int32_t id;
@@ -48,6 +51,18 @@ Nodes2 snap2(const geometry::Oracle2& oracle, const samr::RefinedGrid2& g, const
     return id;
   };
 
+  std::vector<std::int32_t> plane_candidates;
+  const auto on_periodic_plane = [&](grid::LatticeKey k) {
+    return (lattice.periodic[0] && grid::key2_x(k) == 0) || (lattice.periodic[1] && grid::key2_y(k) == 0);
+  };
+  // The position of node `id` seen at frame point (fx, fy) ∈ [0, P]: + the period on each
+  // periodic axis where the frame point is the image at P of the canonical 0.
+  const auto frame_position = [&](std::int32_t id, std::int64_t fx, std::int64_t fy) {
+    Vec2 p = nodes.position[static_cast<std::size_t>(id)];
+    if (lattice.periodic[0] && fx == lattice.fine_period(0)) p[0] += lattice.period(0);
+    if (lattice.periodic[1] && fy == lattice.fine_period(1)) p[1] += lattice.period(1);
+    return p;
+  };
   // 1. Corners of every leaf, and their phases. A leaf that no boundary meets lies inside
   //    one phase, so its corners take that phase without asking the oracle per corner.
   nodes.cell_corners.resize(forest.size());
@@ -62,9 +77,17 @@ Nodes2 snap2(const geometry::Oracle2& oracle, const samr::RefinedGrid2& g, const
     const auto candidates = g.candidates_of_root(g.root_of(c));
     if (g.is_cut(c)) {
       for (std::int32_t id : ids)
-        if (nodes.mask[static_cast<std::size_t>(id)] == 0)
-          nodes.mask[static_cast<std::size_t>(id)] =
-              oracle.closure_phases(nodes.position[static_cast<std::size_t>(id)], candidates);
+        if (nodes.mask[static_cast<std::size_t>(id)] == 0) {
+          const Vec2& p = nodes.position[static_cast<std::size_t>(id)];
+          // A node on a periodic plane is a corner of cells on both sides of the period,
+          // whose candidate lists hold the geometry in different frames: ask for its own.
+          if (on_periodic_plane(nodes.key[static_cast<std::size_t>(id)])) {
+            oracle.candidates(Box2{p, p}, plane_candidates);
+            nodes.mask[static_cast<std::size_t>(id)] = oracle.closure_phases(p, plane_candidates);
+          } else {
+            nodes.mask[static_cast<std::size_t>(id)] = oracle.closure_phases(p, candidates);
+          }
+        }
     } else {
       PhaseMask bit = matrix_bit;
       if (!candidates.empty()) {
@@ -99,12 +122,16 @@ Nodes2 snap2(const geometry::Oracle2& oracle, const samr::RefinedGrid2& g, const
   // The crossing of edge v→w nearest v, as a distance in units of the edge length, or +inf.
   const auto nearest_crossing = [&](std::int64_t vx, std::int64_t vy, std::int64_t wx, std::int64_t wy,
                                     std::int32_t v, std::int32_t w, Snap& out) -> double {
+    // Keys in the edge's frame (v is canonical; w may be the image at P of a canonical 0).
     const bool v_first = grid::key2(vx, vy) < grid::key2(wx, wy);
-    const std::int32_t a = v_first ? v : w, b = v_first ? w : v;
-    const Vec2 pa = nodes.position[static_cast<std::size_t>(a)], pb = nodes.position[static_cast<std::size_t>(b)];
+    const Vec2 pv = nodes.position[static_cast<std::size_t>(v)], pw = frame_position(w, wx, wy);
+    const Vec2 pa = v_first ? pv : pw, pb = v_first ? pw : pv;
     const std::int64_t units = lattice.units(0);
-    const std::int32_t root = forest.root(std::min((vx + wx) / 2 / units, forest.range().hi[0] - 1),
-                                          std::min((vy + wy) / 2 / units, forest.range().hi[1] - 1));
+    // The root holding the edge's midpoint (an edge on a non-periodic max face: the last).
+    const auto cell = [&](int d, std::int64_t mid) {
+      return lattice.periodic[d] ? mid / units : std::min(mid / units, forest.range().hi[d] - 1);
+    };
+    const std::int32_t root = forest.root(cell(0, (vx + wx) / 2), cell(1, (vy + wy) / 2));
     if (root < 0) return std::numeric_limits<double>::infinity();
     oracle.crossings(pa, pb, g.candidates_of_root(root), crossings);
     if (crossings.empty()) return std::numeric_limits<double>::infinity();
@@ -123,7 +150,8 @@ Nodes2 snap2(const geometry::Oracle2& oracle, const samr::RefinedGrid2& g, const
     const std::int64_t x0 = forest.fine_x(c), y0 = forest.fine_y(c), s = forest.fine_size(c);
     const std::int64_t corners[4][2] = {{x0, y0}, {x0 + s, y0}, {x0 + s, y0 + s}, {x0, y0 + s}};
     for (int k = 0; k < 4; ++k) {
-      const std::int64_t vx = corners[k][0], vy = corners[k][1];
+      // The node's decision is taken in its canonical frame, whichever cell visits it first.
+      const std::int64_t vx = lattice.canonical(0, corners[k][0]), vy = lattice.canonical(1, corners[k][1]);
       const std::int32_t v = nodes.cell_corners[static_cast<std::size_t>(c)][static_cast<std::size_t>(k)];
       if (visited[static_cast<std::size_t>(v)]) continue;
       visited[static_cast<std::size_t>(v)] = 1;
@@ -134,7 +162,7 @@ Nodes2 snap2(const geometry::Oracle2& oracle, const samr::RefinedGrid2& g, const
       for (const auto& d : kDirections) {
         if (!can_move(vx, vy, d[0] != 0 ? 0 : 1)) continue;
         const std::int64_t wx = vx + d[0] * s, wy = vy + d[1] * s;
-        const std::int32_t w = nodes.id(grid::key2(wx, wy));
+        const std::int32_t w = nodes.id(wx, wy);
         if (w < 0) continue;  // beyond the ghost layer
         if (nodes.mask[static_cast<std::size_t>(w)] & (PhaseMask{1} << phase)) continue;  // no phase change
         const double distance = nearest_crossing(vx, vy, wx, wy, v, w, candidate);

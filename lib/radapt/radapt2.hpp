@@ -39,26 +39,40 @@ struct Nodes2 {
 
   // Node registry: nodes on the coarse lattice (most of them) by direct index, the others
   // (created by SAMR) in a hash map.
+  // Keys are canonical (lattice.hpp): on a periodic axis a point and its images across the
+  // period are one node, registered at its coordinate in [0, P).
   struct Registry {
     std::int64_t x0 = 0, y0 = 0, nx = 0, ny = 0, unit = 1;  // coarse node range, fine units per cell
+    std::int64_t period_x = 0, period_y = 0;                 // coarse cells per period (0: not periodic)
     std::vector<std::int32_t> coarse;                        // (nx+1)·(ny+1), -1 = none
     grid::KeyMap fine{1024};
 
+    // The window offset of canonical coarse node c along an axis starting at c0.
+    static std::int64_t offset(std::int64_t c, std::int64_t c0, std::int64_t period) {
+      return period == 0 ? c - c0 : ((c - c0) % period + period) % period;
+    }
     std::int32_t* coarse_slot(std::int64_t x, std::int64_t y) {
       return const_cast<std::int32_t*>(static_cast<const Registry*>(this)->coarse_slot(x, y));
     }
     const std::int32_t* coarse_slot(std::int64_t x, std::int64_t y) const {
       if (x % unit || y % unit) return nullptr;
-      const std::int64_t i = x / unit - x0, j = y / unit - y0;
+      const std::int64_t i = offset(x / unit, x0, period_x), j = offset(y / unit, y0, period_y);
       if (i < 0 || j < 0 || i > nx || j > ny) return nullptr;
       return &coarse[static_cast<std::size_t>(j * (nx + 1) + i)];
     }
   } registry;
 
-  std::int32_t id(grid::LatticeKey k) const {
-    const std::int64_t x = grid::key2_x(k), y = grid::key2_y(k);
+  // Id of the node at lattice point (x, y), any image of it on a periodic axis; -1 if none.
+  std::int32_t id(std::int64_t x, std::int64_t y) const {
+    x = canonical(x, registry.period_x), y = canonical(y, registry.period_y);
     if (const std::int32_t* slot = registry.coarse_slot(x, y)) return *slot;
-    return registry.fine.find(k);
+    return registry.fine.find(grid::key2(x, y));
+  }
+  std::int32_t id(grid::LatticeKey k) const { return id(grid::key2_x(k), grid::key2_y(k)); }
+  std::int64_t canonical(std::int64_t x, std::int64_t period_cells) const {
+    if (period_cells == 0) return x;
+    const std::int64_t p = period_cells * registry.unit;
+    return (x % p + p) % p;
   }
 };
 

@@ -139,19 +139,31 @@ RefinedGrid2 refine2(const geometry::Oracle2& oracle, const grid::Lattice2& latt
     throw std::invalid_argument("refine2: one level per inclusion expected");
   RefinedGrid2 g{{}, grid::QuadForest(lattice, range), {}, 0};
   const std::int32_t roots = g.forest.root_count();
-  const std::int64_t nx = range.count(0), ny = range.count(1);
+  const std::int64_t nx = g.forest.range().count(0), ny = g.forest.range().count(1);
 
   // Candidates per root: one AABB-tree query per block of roots, then a box filter.
   std::vector<std::vector<std::int32_t>> per_root(static_cast<std::size_t>(roots));
   std::vector<std::int32_t> block_candidates;
   const double h = lattice.h;
-  for (std::int64_t bj = 0; bj < ny; bj += kCandidateBlock)
-    for (std::int64_t bi = 0; bi < nx; bi += kCandidateBlock) {
-      const std::int64_t ei = std::min(nx, bi + kCandidateBlock), ej = std::min(ny, bj + kCandidateBlock);
-      const Box2 block{{lattice.origin[0] + static_cast<double>(range.lo[0] + bi) * h,
-                        lattice.origin[1] + static_cast<double>(range.lo[1] + bj) * h},
-                       {lattice.origin[0] + static_cast<double>(range.lo[0] + ei) * h,
-                        lattice.origin[1] + static_cast<double>(range.lo[1] + ej) * h}};
+  // A block never straddles a periodic face: its roots are contiguous in canonical indices,
+  // so its box is the canonical cells' (where their geometry, images included, lies).
+  const grid::CellRange<2>& window = g.forest.range();
+  const auto block_end = [&](int d, std::int64_t b, std::int64_t n) {
+    const std::int64_t start = lattice.canonical_cell(d, 0, window.lo[d] + b);
+    std::int64_t e = std::min(n, b + kCandidateBlock);
+    if (lattice.periodic[d]) e = std::min(e, b + lattice.coarse_cells[d] - start);
+    return e;
+  };
+  for (std::int64_t bj = 0, ej = 0; bj < ny; bj = ej)
+    for (std::int64_t bi = 0, ei = 0; bi < nx; bi = ei) {
+      ei = block_end(0, bi, nx);
+      ej = block_end(1, bj, ny);
+      // Window position bi holds canonical cell ci0 (likewise j).
+      const std::int64_t ci0 = lattice.canonical_cell(0, 0, window.lo[0] + bi);
+      const std::int64_t cj0 = lattice.canonical_cell(1, 0, window.lo[1] + bj);
+      const Box2 block{{lattice.origin[0] + static_cast<double>(ci0) * h, lattice.origin[1] + static_cast<double>(cj0) * h},
+                       {lattice.origin[0] + static_cast<double>(ci0 + ei - bi) * h,
+                        lattice.origin[1] + static_cast<double>(cj0 + ej - bj) * h}};
       oracle.candidates(block, block_candidates);
       for (std::int32_t k : block_candidates) {
         const Box2 b = oracle.bounding_box(k);
@@ -159,10 +171,10 @@ RefinedGrid2 refine2(const geometry::Oracle2& oracle, const grid::Lattice2& latt
         const auto first = [&](double lo, int d) {
           return static_cast<std::int64_t>(std::floor((lo - lattice.origin[d]) / h)) - 1;
         };
-        const std::int64_t i0 = std::max(bi, first(b.min[0], 0) - range.lo[0]);
-        const std::int64_t j0 = std::max(bj, first(b.min[1], 1) - range.lo[1]);
-        const std::int64_t i1 = std::min(ei - 1, first(b.max[0], 0) + 2 - range.lo[0]);
-        const std::int64_t j1 = std::min(ej - 1, first(b.max[1], 1) + 2 - range.lo[1]);
+        const std::int64_t i0 = std::max(bi, first(b.min[0], 0) - ci0 + bi);
+        const std::int64_t j0 = std::max(bj, first(b.min[1], 1) - cj0 + bj);
+        const std::int64_t i1 = std::min(ei - 1, first(b.max[0], 0) + 2 - ci0 + bi);
+        const std::int64_t j1 = std::min(ej - 1, first(b.max[1], 1) + 2 - cj0 + bj);
         for (std::int64_t j = j0; j <= j1; ++j)
           for (std::int64_t i = i0; i <= i1; ++i) {
             const std::int32_t r = static_cast<std::int32_t>(j * nx + i);

@@ -14,10 +14,14 @@ namespace {
 
 using Tri = std::array<std::uint8_t, 3>;
 
+// The points of one leaf, in the leaf's frame: id is the canonical node (or a point made
+// here), shift the periodic image it is seen at (bit d: + the period along d; lattice.hpp).
 struct QuadPoints {
   Vec2 p[10];
   PhaseMask m[10];
   std::int32_t id[10];
+  std::uint8_t shift[10] = {};
+  grid::LatticeKey key[4];  // the corners' keys in the leaf's frame
 };
 
 // Phase of a triangle: the phase whose closure holds all three vertices; when several
@@ -70,17 +74,52 @@ class Subdivider {
   Triangles2 out_;
   std::vector<geometry::Crossing> crossings_;
 
+  grid::KeyMap images_{16};
+  bool images_made_ = false;  // extra_identity is kept once the first image is made  // (canonical node, shift) → output point, for periodic images
+
   std::int32_t node(std::int64_t x, std::int64_t y) const {
-    const std::int32_t id = nodes_.id(grid::key2(x, y));
+    const std::int32_t id = nodes_.id(x, y);
     CISAMR_CHECK(id >= 0, "subdivide2: missing lattice node");
     return id;
   }
+  // Which periodic image the frame point (x, y) ∈ [0, P] is of its canonical node.
+  std::uint8_t shift_of(std::int64_t x, std::int64_t y) const {
+    const grid::Lattice2& l = forest_.lattice();
+    return static_cast<std::uint8_t>((l.periodic[0] && x == l.fine_period(0) ? 1 : 0) |
+                                      (l.periodic[1] && y == l.fine_period(1) ? 2 : 0));
+  }
+  Vec2 shifted(Vec2 p, std::uint8_t shift) const {
+    const grid::Lattice2& l = forest_.lattice();
+    if (shift & 1) p[0] += l.period(0);
+    if (shift & 2) p[1] += l.period(1);
+    return p;
+  }
   std::int32_t add_point(const Vec2& p) {
     out_.extra_points.push_back(p);
+    if (images_made_) out_.extra_identity.push_back(Triangles2::kNoKey);
     return static_cast<std::int32_t>(nodes_.key.size() + out_.extra_points.size() - 1);
   }
-  void emit(std::int32_t a, std::int32_t b, std::int32_t c, int phase) {
-    out_.triangles.insert(out_.triangles.end(), {a, b, c});
+  // The output point of canonical node `id` seen as its image `shift`: the node itself, or
+  // a point of the max face made once, at its position plus the periods, with the lattice
+  // key of the image (so that partitions merge it like any lattice node).
+  std::int32_t output_id(std::int32_t id, std::uint8_t shift) {
+    if (shift == 0 || static_cast<std::size_t>(id) >= nodes_.key.size()) return id;
+    const std::uint64_t image_key = (static_cast<std::uint64_t>(id) << 2) | shift;
+    if (const std::int32_t known = images_.find(image_key); known >= 0) return known;
+    if (!images_made_) out_.extra_identity.assign(out_.extra_points.size(), Triangles2::kNoKey), images_made_ = true;
+    const grid::Lattice2& l = forest_.lattice();
+    const grid::LatticeKey k = nodes_.key[static_cast<std::size_t>(id)];
+    const std::int64_t x = grid::key2_x(k) + ((shift & 1) ? l.fine_period(0) : 0);
+    const std::int64_t y = grid::key2_y(k) + ((shift & 2) ? l.fine_period(1) : 0);
+    const std::int32_t out = add_point(shifted(nodes_.position[static_cast<std::size_t>(id)], shift));
+    out_.extra_identity.back() = grid::key2(x, y);
+    bool inserted = false;
+    images_.insert(image_key, out, inserted);
+    return out;
+  }
+  void emit(const QuadPoints& q, int a, int b, int c, int phase) {
+    out_.triangles.insert(out_.triangles.end(), {output_id(q.id[a], q.shift[a]), output_id(q.id[b], q.shift[b]),
+                                                 output_id(q.id[c], q.shift[c])});
     out_.phase.push_back(phase);
   }
 
@@ -93,7 +132,9 @@ class Subdivider {
     const auto& corner_ids = nodes_.cell_corners[static_cast<std::size_t>(c)];
     for (int k = 0; k < 4; ++k) {
       q.id[k] = corner_ids[static_cast<std::size_t>(k)];
-      q.p[k] = nodes_.position[static_cast<std::size_t>(q.id[k])];
+      q.shift[k] = shift_of(cx[k], cy[k]);
+      q.key[k] = grid::key2(cx[k], cy[k]);
+      q.p[k] = shifted(nodes_.position[static_cast<std::size_t>(q.id[k])], q.shift[k]);
       q.m[k] = nodes_.mask[static_cast<std::size_t>(q.id[k])];
     }
     // Hanging nodes: an edge neighbour refined beyond this leaf's level.
@@ -113,8 +154,8 @@ class Subdivider {
     const PhaseMask common = q.m[0] & q.m[1] & q.m[2] & q.m[3];
     if (!moved && std::popcount(common) == 1) {  // the common case: an untouched square
       const int phase = std::countr_zero(common);
-      emit(q.id[0], q.id[1], q.id[2], phase);
-      emit(q.id[0], q.id[2], q.id[3], phase);
+      emit(q, 0, 1, 2, phase);
+      emit(q, 0, 2, 3, phase);
       return;
     }
     split_quad(q, candidates, level);
@@ -131,7 +172,9 @@ class Subdivider {
     for (int e = 0; e < 4; ++e)
       if ((hanging >> e) & 1) {
         const int a = e, b = (e + 1) % 4;
-        q.id[templates2::mid(e)] = node((cx[a] + cx[b]) / 2, (cy[a] + cy[b]) / 2);
+        const std::int64_t mx = (cx[a] + cx[b]) / 2, my = (cy[a] + cy[b]) / 2;
+        q.id[templates2::mid(e)] = node(mx, my);
+        q.shift[templates2::mid(e)] = shift_of(mx, my);
       }
     const auto& t = templates2::kHangingClosure[static_cast<std::size_t>(hanging)];
     bool needs_centre = false;
@@ -143,7 +186,7 @@ class Subdivider {
     }
     for (int k = 0; k < t.count; ++k) {
       const auto& tri = t.tri[static_cast<std::size_t>(k)];
-      emit(q.id[tri[0]], q.id[tri[1]], q.id[tri[2]], phase);
+      emit(q, tri[0], tri[1], tri[2], phase);
     }
   }
 
@@ -164,7 +207,7 @@ class Subdivider {
     for (int diag = 0; diag < 2; ++diag) {
       const int a = diag == 0 ? 1 : 0, b = diag == 0 ? 3 : 2;  // the crossed diagonal
       if (q.m[a] & q.m[b]) continue;
-      const bool a_first = nodes_.key[static_cast<std::size_t>(q.id[a])] < nodes_.key[static_cast<std::size_t>(q.id[b])];
+      const bool a_first = q.key[a] < q.key[b];  // keys in the leaf's frame
       const Vec2 pa = q.p[a_first ? a : b], pb = q.p[a_first ? b : a];
       oracle_.crossings(pa, pb, candidates, crossings_);
       for (const auto& cr : crossings_) {
@@ -247,8 +290,7 @@ class Subdivider {
     for (const Tri& t : tris) {
       PhaseMask common = q.m[t[0]] & q.m[t[1]] & q.m[t[2]];
       if (common == 0 && unresolved) common = ~PhaseMask{0};
-      emit(q.id[t[0]], q.id[t[1]], q.id[t[2]],
-           triangle_phase(oracle_, candidates, common, q.p[t[0]], q.p[t[1]], q.p[t[2]]));
+      emit(q, t[0], t[1], t[2], triangle_phase(oracle_, candidates, common, q.p[t[0]], q.p[t[1]], q.p[t[2]]));
     }
   }
 };

@@ -21,6 +21,11 @@ inline constexpr int kReachCells2 = radapt::kReachCells2;
 
 struct Triangles2 {
   std::vector<Vec2> extra_points;  // points created here; node id = nodes.size() + index
+  // Periodic scenes: per extra point its lattice key when it is the image across the period
+  // of a lattice node (a node of the max face, key with X = P), else kNoKey. Empty when
+  // no point is such an image.
+  std::vector<std::uint64_t> extra_identity;
+  static constexpr std::uint64_t kNoKey = ~std::uint64_t{0};
   std::vector<std::int32_t> triangles;  // 3 node ids per triangle, counter-clockwise
   std::vector<std::int32_t> phase;      // phase index per triangle
   std::int64_t cut_quads = 0, double_diagonal = 0, hanging_cells = 0;

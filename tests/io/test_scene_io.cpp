@@ -106,7 +106,7 @@ TEST(SceneIo, Minimal2dSceneGetsDefaults) {
   EXPECT_EQ(s.dimension, 2);
   EXPECT_EQ(s.domain_max[0], 2);
   EXPECT_EQ(s.domain_max[2], 0);
-  EXPECT_FALSE(s.periodic);
+  EXPECT_FALSE(s.any_periodic());
   EXPECT_EQ(s.h, 0.25);
   EXPECT_EQ(s.levels, 3);
   ASSERT_EQ(s.phases.size(), 2u);
@@ -132,7 +132,7 @@ TEST(SceneIo, Minimal3dSceneGetsDefaults) {
                    {"shape": "ellipsoid", "center": [0.5, 0.5, 2], "semi_axes": [0.3, 0.2, 0.1], "phase": 7}]
   })", "");
   EXPECT_EQ(s.dimension, 3);
-  EXPECT_TRUE(s.periodic);
+  EXPECT_TRUE(s.periodic[0] && s.periodic[1] && s.periodic[2]);
   EXPECT_EQ(s.levels, 0);
   ASSERT_EQ(s.phases.size(), 2u);
   EXPECT_TRUE(same(s.phases[0], Phase{4, "phase4", false}));
@@ -169,7 +169,7 @@ SceneDesc full_2d_scene() {
   s.domain_max = {0.9, 1.0 / 3.0 + 1.0, 0};  // extents 1 and 1 (to rounding): h = 0.1 divides
   s.h = 0.1;
   s.levels = 2;
-  s.periodic = true;
+  s.periodic = {true, true, false};
   s.phases = {{1, "epoxy", false}, {2, "glass fiber", false}, {3, "pore", true}};
   s.matrix_phase = 1;
   s.inclusions.push_back({Circle{{0.123456789012345678, 0.7}, 1e-17 + 0.05}, 2, 3});

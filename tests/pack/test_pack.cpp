@@ -260,7 +260,7 @@ TEST(PackDeterminism, SameSeedSameBytesOtherSeedOtherScene) {
 TEST(PackPeriodic, ImagesAreCheckedAcrossFaces) {
   const auto r = run(spec2d(R"({"shape": "circle", "count": 500, "min_gap": 0.3, "size": 1.5})",
                             R"(, "periodic": true)"));
-  ASSERT_TRUE(r.scene.periodic);
+  ASSERT_TRUE(r.scene.any_periodic());
   const auto c = all_of<Circle>(r.scene);
   int crossing = 0, close_images = 0;
   for (const auto& x : c) crossing += x.center[0] < 1.5 || x.center[0] > 98.5 || x.center[1] < 1.5 || x.center[1] > 98.5;

@@ -106,7 +106,7 @@ TEST(PartitionLoad, ClippedOutsideAndWrappedWhenPeriodic) {
   SceneDesc s = base_scene(2, 20, 1);
   s.inclusions.push_back({Circle{{0, 10}, 2}, 2, 1});  // half outside the domain
   EXPECT_NEAR(partition::total_load(s), M_PI * 2, 1e-9);
-  s.periodic = true;
+  s.periodic = {true, true, true};
   EXPECT_NEAR(partition::total_load(s), 2 * M_PI * 2, 1e-9);
 }
 
