@@ -11,11 +11,9 @@
 #include "commands.hpp"
 #include "core/error.hpp"
 #include "core/timer.hpp"
-#include "geometry/periodic.hpp"
 #include "geometry/scene.hpp"
 #include "io/mesh_io.hpp"
 #include "io/scene_io.hpp"
-#include "pipeline/pipeline.hpp"
 #include "quality/certificate.hpp"
 #include "quality/phase_match.hpp"
 
@@ -52,8 +50,7 @@ quality::Certificate certify_mesh(const mesh::SimplexMesh<Dim>& mesh, const geom
   progress(flags, "building the geometry oracle");
   const geometry::Oracle<Dim> oracle = [&] {
     ScopedPhase timer(&times, "oracle");
-    // A periodic scene's geometry wraps: the images that enter the domain count.
-    return geometry::Oracle<Dim>(geometry::expand_periodic(*scene, pipeline::periodic_reach(*scene)));
+    return geometry::Oracle<Dim>(*scene);  // a periodic scene's geometry wraps: its images count
   }();
   ScopedPhase timer(&times, "certify");
   progress(flags, "checking the mesh against the scene");

@@ -11,7 +11,6 @@
 
 #include "core/error.hpp"
 #include "geometry/oracle.hpp"
-#include "geometry/periodic.hpp"
 #include "io/mesh_io.hpp"
 #include "io/mesh_svg.hpp"
 #include "io/scene_io.hpp"
@@ -91,8 +90,7 @@ template <int Dim>
 void mesh_sequential(const Comm& comm, const geometry::SceneDesc& scene, MeshRun<Dim>& run) {
   using Oracle = geometry::Oracle<Dim>;
   tell(run.options, "oracle");
-  // A periodic scene's oracle holds the images that wrap into the domain (geometry/periodic.hpp).
-  const Oracle oracle(geometry::expand_periodic(scene, pipeline::periodic_reach(scene)));
+  const Oracle oracle(scene);  // a periodic scene's holds the images that wrap in (geometry/periodic.hpp)
   pipeline::Result<Dim> result = pipeline::mesh(oracle, run.options.pipeline);
   parallel::DistributedMesh<Dim>& m = run.mesh;
   m.piece.mesh = std::move(result.mesh);

@@ -2,6 +2,7 @@
 // search, the crossing sweep, phase lookup, interface groups, measures and distances,
 // over the shape models of shape_model.hpp. The per-family geometry is in shape_*.cpp,
 // the CGAL search trees in box_index.cpp.
+#include "geometry/periodic.hpp"
 #include "geometry/oracle.hpp"
 
 #include <algorithm>
@@ -235,7 +236,11 @@ bool Oracle<Dim>::Impl::regions_intersect(std::int32_t i, std::int32_t j, bool i
 // ---------------------------------------------------------------- public API
 template <int Dim>
 Oracle<Dim>::Oracle(const SceneDesc& scene) : impl_(std::make_unique<Impl>()) {
-  impl_->validate_and_build(scene);
+  // A periodic scene as listed: its geometry wraps, so the oracle holds the images too.
+  if (scene.any_periodic() && !scene.images_expanded)
+    impl_->validate_and_build(expand_periodic(scene, periodic_reach(scene)));
+  else
+    impl_->validate_and_build(scene);
 }
 template <int Dim>
 Oracle<Dim>::~Oracle() = default;

@@ -30,6 +30,7 @@ Vec3 periods(const SceneDesc& scene) {
 SceneDesc expand_periodic(const SceneDesc& scene, double reach, std::span<const Box3> known) {
   SceneDesc out = scene;
   if (!scene.any_periodic()) return out;
+  out.images_expanded = true;
   const Vec3 period = periods(scene);
   const std::size_t listed = scene.inclusions.size();
   out.image_base.assign(listed, -1);

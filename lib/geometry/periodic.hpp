@@ -12,12 +12,18 @@
 
 namespace cisamr::geometry {
 
+// How far beyond a periodic face the mesher needs the images of inclusions: the reach of
+// the effective-level rules at the coarsest level and a margin. Every stage evaluates a
+// cell in its canonical frame, inside the domain.
+inline double periodic_reach(const SceneDesc& scene) { return 10 * scene.h; }
+
 // The period of the domain along each axis (its extent; 0 on axes that are not periodic).
 Vec3 periods(const SceneDesc& scene);
 
 // The scene with the images of every inclusion whose box, shifted by a whole number of
 // periods along the periodic axes, meets the domain grown by `reach` on those axes. Sets
-// image_base and image_shift. `known`: boxes of inclusions whose shape cannot give one
+// image_base, image_shift and images_expanded. An Oracle built from a periodic scene
+// expands it itself; call this only to hold the expanded scene (the parallel mesher). `known`: boxes of inclusions whose shape cannot give one
 // (an STL surface not loaded on this rank); empty: from the shapes. A scene with no
 // periodic axis comes back unchanged (and with no image lists).
 SceneDesc expand_periodic(const SceneDesc& scene, double reach, std::span<const Box3> known = {});

@@ -106,6 +106,7 @@ struct SceneDesc {
   // inclusion that inclusion k is an image of (−1 for a listed one), image_shift[k] its
   // shift in periods per axis. Empty for a scene as read.
   std::vector<std::int32_t> image_base;
+  bool images_expanded = false;  // set by expand_periodic (a subset of such a scene keeps it)
   std::vector<std::array<std::int8_t, 3>> image_shift;
 
   bool any_periodic() const {

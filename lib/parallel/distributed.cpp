@@ -310,7 +310,7 @@ DistributedMesh<Dim> mesh_distributed(const Comm& comm, geometry::SceneDesc scen
   if (scene.any_periodic())
     run_collectively(comm, [&] {
       lattice_check<Dim>(scene, options.pipeline);
-      scene = geometry::expand_periodic(scene, pipeline::periodic_reach(scene), known);
+      scene = geometry::expand_periodic(scene, geometry::periodic_reach(scene), known);
       expanded_known = geometry::expanded_boxes(scene, known);
     });
   const std::vector<Box3>& known_boxes = scene.image_base.empty() ? known : expanded_known;

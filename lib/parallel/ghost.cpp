@@ -230,6 +230,7 @@ geometry::SceneDesc subset_scene(const geometry::SceneDesc& scene, const std::ve
   out.domain_min = scene.domain_min;
   out.domain_max = scene.domain_max;
   out.periodic = scene.periodic;
+  out.images_expanded = scene.images_expanded;  // the subset's images are already there
   out.h = scene.h;
   out.levels = scene.levels;
   out.phases = scene.phases;

@@ -73,10 +73,6 @@ grid::Lattice<Dim> make_lattice(const geometry::SceneDesc& scene, const Options&
 template <int Dim>
 grid::CellRange<Dim> ghosted_range(const grid::Lattice<Dim>& lattice, const grid::CellRange<Dim>& box, int ghost);
 
-// How far beyond a periodic face the kernel needs the images of inclusions
-// (geometry::expand_periodic): the reach of the effective-level rules at the coarsest
-// level and a margin. Every stage evaluates a cell in its canonical frame, inside the domain.
-inline double periodic_reach(const geometry::SceneDesc& scene) { return 10 * scene.h; }
 
 // A rough count of the elements a scene's mesh will have, before any memory is taken: the
 // background cells, and per inclusion a band along its interface at its requested level

@@ -299,7 +299,7 @@ std::string certificate_json(const Certificate& c) {
     Json per = Json::array();
     for (const PeriodicAxisReport& a : c.periodic->axes)
       per.push_back({{"axis", std::string(1, "xyz"[a.axis])}, {"min_facets", a.min_facets}, {"max_facets", a.max_facets},
-                     {"unmatched", a.unmatched}, {"near_face_nodes", a.near_face_nodes}});
+                     {"unmatched", a.unmatched}, {"facing_void", a.facing_void}, {"near_face_nodes", a.near_face_nodes}});
     j["periodic"] = {{"ok", c.periodic->ok}, {"axes", per}};
   }
   j["notes"] = c.notes;

@@ -63,7 +63,14 @@ Certificate certify(const mesh::SimplexMesh<Dim>& m, const geometry::Oracle<Dim>
       axes[static_cast<std::size_t>(d)] = scene.periodic[static_cast<std::size_t>(d)];
       if (axes[static_cast<std::size_t>(d)]) faces.max[d] = faces.min[d] + period[d];
     }
-    c.periodic = check_periodic<Dim>(m, faces, axes);
+    std::vector<std::int32_t> candidates;
+    const auto in_void = [&](const Vec<Dim>& p) {
+      Box<Dim> at;
+      at.min = at.max = p;
+      oracle.candidates(at, candidates);
+      return scene.phases[static_cast<std::size_t>(oracle.phase_at(p, candidates))].is_void;
+    };
+    c.periodic = check_periodic<Dim>(m, faces, axes, in_void);
   }
   return c;
 }

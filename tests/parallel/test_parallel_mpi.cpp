@@ -71,6 +71,14 @@ TEST(MpiInvariance, RandomScenes) {
     }
 }
 
+TEST(MpiInvariance, PeriodicRandomScenes) {
+  for (int n : partition_counts())
+    for (unsigned seed = 1; seed <= 2; ++seed) {
+      SCOPED_TRACE("seed " + std::to_string(seed));
+      expect_invariant(cisamr::testing::periodic_scene(seed), n, false);
+    }
+}
+
 TEST(MpiInvariance, OwnedNodesFirstAndGlobalIdsContiguous) {
   const int n = partition_counts().back();
   const testing::RunOutcome par = testing::run_parallel(comm(), testing::corner_scene(), n);

@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "core/error.hpp"
+#include "geometry/oracle.hpp"
 #include "geometry/scene.hpp"
 
 namespace cisamr::testing {
@@ -215,5 +217,29 @@ class RandomScene2 {
     push(Ellipse{{x + d * std::cos(t), y + d * std::sin(t)}, {r, 0.6 * r}, uniform(0, M_PI)}, phase, x, y, d + r);
   }
 };
+
+// The random scene made periodic along both axes, x only or y only (by seed). Placed for a
+// box, some inclusions overlap an image of one of another phase: those are dropped, one at
+// a time, as the oracle names them (the error is the one a user would get).
+inline geometry::SceneDesc periodic_scene(unsigned seed) {
+  geometry::SceneDesc s = RandomScene2(seed).make();
+  switch (seed % 5) {
+    case 3: s.periodic = {true, false, false}; break;
+    case 4: s.periodic = {false, true, false}; break;
+    default: s.periodic = {true, true, false};
+  }
+  for (int attempt = 0; attempt < 20; ++attempt) {
+    try {
+      const geometry::Oracle2 probe(s);
+      break;
+    } catch (const InputError& e) {
+      const std::string field = e.field();
+      if (e.problem().find("periodic image") == std::string::npos) throw;
+      const std::size_t k = std::stoul(field.substr(field.find('[') + 1));
+      s.inclusions.erase(s.inclusions.begin() + static_cast<std::ptrdiff_t>(k));
+    }
+  }
+  return s;
+}
 
 }  // namespace cisamr::testing
