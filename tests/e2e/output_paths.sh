@@ -1,9 +1,9 @@
 #!/bin/bash
 # Where outputs go (lib/io/README.md, "Output paths"), through the built binary: a symlinked
 # output replaces its target and stays a link; `-` and /dev/stdout carry only the data on
-# standard output (summaries move to standard error); SIGTERM in the middle of a write leaves
-# neither a temporary nor the final file (also under mpiexec); a run whose second output
-# fails leaves none of its outputs.
+# standard output (summaries move to standard error); SIGTERM or SIGINT in the middle of a
+# write leaves neither a temporary nor the final file (also under mpiexec); a run whose second
+# output fails leaves none of its outputs.
 # usage: output_paths.sh CISAMR SOURCE_DIR [MPIEXEC]
 set -u
 cisamr=$1 source_dir=$2 mpiexec=${3:-}
@@ -91,8 +91,8 @@ cat > "$dir/big.json" << 'EOF'
  "mesh": {"h": 0.0125}, "inclusions": [{"shape": "sphere", "center": [0.5, 0.5, 0.5], "radius": 0.3}]}
 EOF
 # Starts the command in the background, waits until its temporary appears (the write has
-# begun), sleeps DELAY, sends SIGTERM to PID; checks that the process died of it and left
-# nothing in OUTDIR. usage: kill_mid_write LABEL OUTDIR DELAY COMMAND...
+# begun), sleeps DELAY, sends SIGTERM (or $SIGNAL) to PID; checks that the process died of it
+# and left nothing in OUTDIR. usage: [SIGNAL=INT] kill_mid_write LABEL OUTDIR DELAY COMMAND...
 kill_mid_write() {
   local label=$1 outdir=$2 delay=$3; shift 3
   mkdir -p "$outdir"
@@ -105,7 +105,7 @@ kill_mid_write() {
     [ $waited -lt 6000 ] || { kill -KILL "$pid"; fail "$label: no temporary after 120 s"; }
   done
   sleep "$delay"
-  kill -TERM "$pid"
+  kill -"${SIGNAL:-TERM}" "$pid"
   wait "$pid"
   local rc=$?
   [ $rc -ne 0 ] || fail "$label: finished before SIGTERM (delay $delay s too long for this machine)"
@@ -117,12 +117,15 @@ kill_mid_write() {
      "$cisamr" certify "$outdir/$left" -q > /dev/null 2>&1; then
     left=""
   fi
-  [ -z "$left" ] || fail "$label: SIGTERM after $delay s left: $left"
+  [ -z "$left" ] || fail "$label: SIG${SIGNAL:-TERM} after $delay s left: $left"
 }
 for delay in 0 0.3; do
   kill_mid_write "SIGTERM, .msh" "$dir/kill_msh_$delay" "$delay" "$cisamr" mesh "$dir/big.json" -o "$dir/kill_msh_$delay/big.msh" -q
 done
 kill_mid_write "SIGTERM, .vtu" "$dir/kill_vtu" 0 "$cisamr" mesh "$dir/big.json" -o "$dir/kill_vtu/big.vtu" -q
+# SIGINT (Ctrl-C): a background job of a script starts with SIGINT ignored; perl restores it.
+SIGNAL=INT kill_mid_write "SIGINT, .msh" "$dir/kill_int" 0 \
+  perl -e '$SIG{INT} = "DEFAULT"; exec @ARGV' -- "$cisamr" mesh "$dir/big.json" -o "$dir/kill_int/big.msh" -q
 # Killed before writing: nothing at all.
 mkdir "$dir/kill_early"
 "$cisamr" mesh "$dir/big.json" -o "$dir/kill_early/big.vtu" -q & pid=$!

@@ -94,6 +94,16 @@ TEST_F(Cli, BadOutputsExitWithCode2) {
   EXPECT_EQ(dir_missing.exit_code, 2);
   EXPECT_NE(dir_missing.output.find("cannot write"), std::string::npos) << dir_missing.output;
   EXPECT_EQ(files_other_than_json(), 0u);
+  // A .pvtu piece that cannot be written: the error names the piece, not the hidden
+  // temporary it was written to before (".out_0.vtu.part.PID").
+  const std::string pieces = (dir / "no" / "such" / "dir" / "out.pvtu").string();
+  const CommandResult piece = run("mesh " + scene + " -o " + pieces + " --partitions 2 -q");
+  EXPECT_EQ(piece.exit_code, 2) << piece.output;
+  EXPECT_NE(piece.output.find((dir / "no" / "such" / "dir" / "out_0.vtu").string() + ": cannot write"), std::string::npos)
+      << piece.output;
+  EXPECT_EQ(piece.output.find(".part."), std::string::npos) << piece.output;
+  EXPECT_EQ(piece.output.find(".tmp."), std::string::npos) << piece.output;
+  EXPECT_EQ(files_other_than_json(), 0u);
   const CommandResult usage = run("mesh");
   EXPECT_EQ(usage.exit_code, 2);
 }
