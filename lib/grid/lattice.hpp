@@ -52,6 +52,21 @@ struct Lattice {
     x %= p;
     return x < 0 ? x + p : x;
   }
+  // Which image of its canonical point a frame point ∈ [0, P] per axis is: bit d set where
+  // the point is at P on a periodic axis (the canonical 0 seen from the cell before it).
+  std::uint8_t image_shift(const std::array<std::int64_t, Dim>& frame) const {
+    std::uint8_t shift = 0;
+    for (int d = 0; d < Dim; ++d)
+      if (periodic[d] && frame[d] == fine_period(d)) shift |= static_cast<std::uint8_t>(1u << d);
+    return shift;
+  }
+  // A canonical position seen as image `shift`: + the period on each axis of the shift (the
+  // one formula, so a min-face coordinate becomes exactly the max face's).
+  Vec<Dim> shifted(Vec<Dim> p, std::uint8_t shift) const {
+    for (int d = 0; d < Dim; ++d)
+      if (shift & (1u << d)) p[d] += period(d);
+    return p;
+  }
   // A cell index at `level` reduced into [0, N·2^level) on a periodic axis.
   std::int64_t canonical_cell(int d, int level, std::int64_t i) const {
     if (!periodic[d]) return i;

@@ -224,12 +224,6 @@ int rank_of_partition(int partition, int partitions, int ranks) {
   return r;
 }
 
-// Builds the lattice only to refuse a scene it cannot serve (a 3D periodic one) up front.
-template <int Dim>
-void lattice_check(const geometry::SceneDesc& scene, const pipeline::Options& options) {
-  (void)scene_lattice<Dim>(scene, options);
-}
-
 template <int Dim>
 DistributedMesh<Dim> mesh_distributed(const Comm& comm, const std::string& scene_path, const MeshOptions& options) {
   const auto start = std::chrono::steady_clock::now();
@@ -309,7 +303,7 @@ DistributedMesh<Dim> mesh_distributed(const Comm& comm, geometry::SceneDesc scen
   std::vector<Box3> expanded_known;
   if (scene.any_periodic())
     run_collectively(comm, [&] {
-      lattice_check<Dim>(scene, options.pipeline);
+      (void)scene_lattice<Dim>(scene, options.pipeline);  // refuses what it cannot mesh (3D) before expanding
       scene = geometry::expand_periodic(scene, geometry::periodic_reach(scene), known);
       expanded_known = geometry::expanded_boxes(scene, known);
     });

@@ -17,6 +17,7 @@ Nodes2 snap2(const geometry::Oracle2& oracle, const samr::RefinedGrid2& g, const
   const grid::QuadForest& forest = g.forest;
   const grid::Lattice2& lattice = forest.lattice();
   Nodes2 nodes;
+  nodes.lattice = lattice;
   {
     auto& r = nodes.registry;
     r.unit = lattice.units(0);
@@ -55,13 +56,9 @@ Nodes2 snap2(const geometry::Oracle2& oracle, const samr::RefinedGrid2& g, const
   const auto on_periodic_plane = [&](grid::LatticeKey k) {
     return (lattice.periodic[0] && grid::key2_x(k) == 0) || (lattice.periodic[1] && grid::key2_y(k) == 0);
   };
-  // The position of node `id` seen at frame point (fx, fy) ∈ [0, P]: + the period on each
-  // periodic axis where the frame point is the image at P of the canonical 0.
+  // The position of node `id` seen at frame point (fx, fy) ∈ [0, P] (lattice.hpp).
   const auto frame_position = [&](std::int32_t id, std::int64_t fx, std::int64_t fy) {
-    Vec2 p = nodes.position[static_cast<std::size_t>(id)];
-    if (lattice.periodic[0] && fx == lattice.fine_period(0)) p[0] += lattice.period(0);
-    if (lattice.periodic[1] && fy == lattice.fine_period(1)) p[1] += lattice.period(1);
-    return p;
+    return lattice.shifted(nodes.position[static_cast<std::size_t>(id)], lattice.image_shift({fx, fy}));
   };
   // 1. Corners of every leaf, and their phases. A leaf that no boundary meets lies inside
   //    one phase, so its corners take that phase without asking the oracle per corner.
@@ -108,8 +105,7 @@ Nodes2 snap2(const geometry::Oracle2& oracle, const samr::RefinedGrid2& g, const
   nodes.snapped.assign(n, 0);
 
   // 2. Snap decisions, from original positions and masks only.
-  const std::int64_t fine_max_x = lattice.coarse_cells[0] * lattice.units(0);
-  const std::int64_t fine_max_y = lattice.coarse_cells[1] * lattice.units(0);
+  const std::int64_t fine_max_x = lattice.fine_period(0), fine_max_y = lattice.fine_period(1);
   const auto can_move = [&](std::int64_t x, std::int64_t y, int axis) {
     // On the domain boundary a node may only slide along it.
     return axis == 0 ? !(x == 0 || x == fine_max_x) : !(y == 0 || y == fine_max_y);

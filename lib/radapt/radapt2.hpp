@@ -64,16 +64,12 @@ struct Nodes2 {
 
   // Id of the node at lattice point (x, y), any image of it on a periodic axis; -1 if none.
   std::int32_t id(std::int64_t x, std::int64_t y) const {
-    x = canonical(x, registry.period_x), y = canonical(y, registry.period_y);
+    x = lattice.canonical(0, x), y = lattice.canonical(1, y);
     if (const std::int32_t* slot = registry.coarse_slot(x, y)) return *slot;
     return registry.fine.find(grid::key2(x, y));
   }
   std::int32_t id(grid::LatticeKey k) const { return id(grid::key2_x(k), grid::key2_y(k)); }
-  std::int64_t canonical(std::int64_t x, std::int64_t period_cells) const {
-    if (period_cells == 0) return x;
-    const std::int64_t p = period_cells * registry.unit;
-    return (x % p + p) % p;
-  }
+  grid::Lattice2 lattice;  // the forest's: which axes wrap
 };
 
 // Registers the corners of every leaf, classifies them and snaps nodes of cut cells.

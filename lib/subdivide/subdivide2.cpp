@@ -74,26 +74,16 @@ class Subdivider {
   Triangles2 out_;
   std::vector<geometry::Crossing> crossings_;
 
-  grid::KeyMap images_{16};
-  bool images_made_ = false;  // extra_identity is kept once the first image is made  // (canonical node, shift) → output point, for periodic images
+  grid::KeyMap images_{16};  // (canonical node, shift) → output point, for periodic images
+  bool images_made_ = false;  // extra_identity is kept once the first image is made
 
   std::int32_t node(std::int64_t x, std::int64_t y) const {
     const std::int32_t id = nodes_.id(x, y);
     CISAMR_CHECK(id >= 0, "subdivide2: missing lattice node");
     return id;
   }
-  // Which periodic image the frame point (x, y) ∈ [0, P] is of its canonical node.
-  std::uint8_t shift_of(std::int64_t x, std::int64_t y) const {
-    const grid::Lattice2& l = forest_.lattice();
-    return static_cast<std::uint8_t>((l.periodic[0] && x == l.fine_period(0) ? 1 : 0) |
-                                      (l.periodic[1] && y == l.fine_period(1) ? 2 : 0));
-  }
-  Vec2 shifted(Vec2 p, std::uint8_t shift) const {
-    const grid::Lattice2& l = forest_.lattice();
-    if (shift & 1) p[0] += l.period(0);
-    if (shift & 2) p[1] += l.period(1);
-    return p;
-  }
+  std::uint8_t shift_of(std::int64_t x, std::int64_t y) const { return forest_.lattice().image_shift({x, y}); }
+  Vec2 shifted(const Vec2& p, std::uint8_t shift) const { return forest_.lattice().shifted(p, shift); }
   std::int32_t add_point(const Vec2& p) {
     out_.extra_points.push_back(p);
     if (images_made_) out_.extra_identity.push_back(Triangles2::kNoKey);

@@ -82,6 +82,18 @@ bool has_void(const geometry::SceneDesc& s) {
   return ::testing::AssertionSuccess();
 }
 
+// A square domain [0, size]² of matrix (phase 1) and particles (phase 2), no inclusion yet.
+geometry::SceneDesc two_phase_square(double size, double h, int levels) {
+  geometry::SceneDesc s;
+  s.dimension = 2;
+  s.domain_min = {0, 0, 0};
+  s.domain_max = {size, size, 0};
+  s.h = h;
+  s.levels = levels;
+  s.phases = {{1, "matrix", false}, {2, "particle", false}};
+  return s;
+}
+
 class RandomScenes2 : public ::testing::TestWithParam<unsigned> {};
 
 TEST_P(RandomScenes2, MeshIsConformingBoundedAndFaithful) {
@@ -113,13 +125,7 @@ TEST(Pipeline2, IsDeterministic) {
 // The checks must fail on a broken mesh: move one interface node off the interface,
 // delete a triangle, flip one.
 TEST(Pipeline2, ChecksCatchBrokenMeshes) {
-  geometry::SceneDesc scene;
-  scene.dimension = 2;
-  scene.domain_min = {0, 0, 0};
-  scene.domain_max = {10, 10, 0};
-  scene.h = 1;
-  scene.levels = 1;
-  scene.phases = {{1, "matrix", false}, {2, "particle", false}};
+  geometry::SceneDesc scene = two_phase_square(10, 1, 1);
   scene.inclusions.push_back({geometry::Circle{{5.1, 4.9}, 2.7}, 2, 1});
   const geometry::Oracle2 oracle(scene);
   const auto good = pipeline::mesh(oracle).mesh;
@@ -211,14 +217,8 @@ INSTANTIATE_TEST_SUITE_P(Seeds, PeriodicScenes2, ::testing::Values(1u, 21u, 41u,
 
 // The geometry wraps: an inclusion listed once crossing a corner has its whole area inside.
 TEST(Periodic2, AnInclusionAcrossACornerKeepsItsWholeArea) {
-  geometry::SceneDesc s;
-  s.dimension = 2;
-  s.domain_min = {0, 0, 0};
-  s.domain_max = {8, 8, 0};
-  s.h = 0.5;
-  s.levels = 2;
+  geometry::SceneDesc s = two_phase_square(8, 0.5, 2);
   s.periodic = {true, true, false};
-  s.phases = {{1, "matrix", false}, {2, "particle", false}};
   s.inclusions.push_back({geometry::Circle{{7.6, 0.3}, 1.7}, 2, 2});
   const geometry::Oracle2 oracle(s);
   EXPECT_EQ(oracle.inclusion_count(), 4);  // the circle and its images across x, y and the corner
