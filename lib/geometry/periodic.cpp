@@ -1,11 +1,17 @@
 #include "geometry/periodic.hpp"
 
 #include <cmath>
+#include <string>
+
+#include "core/error.hpp"
 
 #include "geometry/shapes.hpp"
 
 namespace cisamr::geometry {
 namespace {
+
+// Images of one inclusion per periodic axis at most (a shift range of that many periods).
+constexpr std::int64_t kMaxImagesPerAxis = 8;
 
 // An inclusion's box: from its shape, or `known` for an STL surface this rank has not read.
 Box3 box_of(const SceneDesc& scene, std::size_t k, std::span<const Box3> known) {
@@ -44,9 +50,12 @@ SceneDesc expand_periodic(const SceneDesc& scene, double reach, std::span<const 
       if (!scene.periodic[a]) continue;
       lo[a] = static_cast<std::int64_t>(std::ceil((scene.domain_min[a] - reach - box.max[d]) / period[d]));
       hi[a] = static_cast<std::int64_t>(std::floor((scene.domain_max[a] + reach - box.min[d]) / period[d]));
-      // An inclusion meets the domain with at most a few of its images (its size is bounded
-      // by what the oracle accepts); keep the loop finite for absurd input all the same.
-      if (hi[a] - lo[a] > 8) lo[a] = std::max<std::int64_t>(lo[a], -4), hi[a] = std::min<std::int64_t>(hi[a], 4);
+      // Wider than a few periods, an inclusion would cover the whole cell with its own
+      // images many times over: refuse it rather than expand an unbounded number.
+      if (hi[a] - lo[a] > kMaxImagesPerAxis)
+        throw InputError(scene.source, inclusion_field(k),
+                         std::string("spans more than ") + std::to_string(kMaxImagesPerAxis - 2) +
+                             " periods of the periodic domain along " + "xyz"[d]);
     }
     for (std::int64_t sz = lo[2]; sz <= hi[2]; ++sz)
       for (std::int64_t sy = lo[1]; sy <= hi[1]; ++sy)

@@ -66,6 +66,26 @@ TEST_F(Cli, MalformedScenesExitWithCode2NamingFileAndFieldAndLeaveNoOutput) {
        "inclusions[0]"},
       {"unknown-key", h + R"({"shape": "circle", "center": [5, 5], "raduis": 1}]})", "raduis"},
       {"wrong-format", R"({"format": "gmsh", "dimension": 2})", "format"},
+      // Periodic scenes (issue 12).
+      {"periodic-wrong-length", R"({"format": "cisamr-scene/1", "dimension": 2,
+        "domain": {"min": [0, 0], "max": [10, 10], "periodic": [true, false, true]}, "mesh": {"h": 1}, "inclusions": []})",
+       "domain.periodic"},
+      {"periodic-one-cell", R"({"format": "cisamr-scene/1", "dimension": 2,
+        "domain": {"min": [0, 0], "max": [10, 10], "periodic": true}, "mesh": {"h": 10}, "inclusions": []})",
+       "mesh.h"},
+      {"periodic-image-overlap", R"({"format": "cisamr-scene/1", "dimension": 2,
+        "domain": {"min": [0, 0], "max": [10, 10], "periodic": true}, "mesh": {"h": 1},
+        "phases": [{"id": 1, "name": "matrix"}, {"id": 2, "name": "a"}, {"id": 3, "name": "b"}],
+        "inclusions": [{"shape": "circle", "center": [0.5, 5], "radius": 1.5, "phase": 2},
+                       {"shape": "circle", "center": [9, 5], "radius": 1.2, "phase": 3}]})",
+       "periodic image"},
+      {"periodic-wider-than-periods", R"({"format": "cisamr-scene/1", "dimension": 2,
+        "domain": {"min": [0, 0], "max": [10, 10], "periodic": true}, "mesh": {"h": 1},
+        "inclusions": [{"shape": "circle", "center": [5, 5], "radius": 60}]})",
+       "inclusions[0]"},
+      {"periodic-3d", R"({"format": "cisamr-scene/1", "dimension": 3,
+        "domain": {"min": [0, 0, 0], "max": [4, 4, 4], "periodic": true}, "mesh": {"h": 1}, "inclusions": []})",
+       "domain.periodic"},
   };
   for (const BadScene& c : cases) {
     SCOPED_TRACE(c.name);
