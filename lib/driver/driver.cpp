@@ -180,6 +180,11 @@ std::variant<MeshRun<2>, MeshRun<3>> mesh_scene(const Comm& comm, const std::str
     parallel::run_collectively(comm, [&] { check_request<Dim>(scene, options); });
     try {
       run.face_box = face_box<Dim>(scene, options.pipeline);  // builds the lattice: may refuse the scene
+      const grid::Lattice<Dim> lattice = pipeline::make_lattice<Dim>(scene, options.pipeline);
+      for (int d = 0; d < Dim; ++d) {
+        run.periodic[static_cast<std::size_t>(d)] = scene.periodic[static_cast<std::size_t>(d)];
+        run.period[d] = lattice.period(d);
+      }
       if (distributed) {
         parallel::MeshOptions o{.pipeline = run.options.pipeline,
                                 .partitions = options.partitions > 0 ? options.partitions : comm.size(),
@@ -238,6 +243,10 @@ void write_outputs(const Comm& comm, MeshRun<Dim>& run, const Output& output, co
   options.plane = output.plane;
   options.face_box = Box3{};
   for (int d = 0; d < Dim; ++d) options.face_box->min[d] = run.face_box.min[d], options.face_box->max[d] = run.face_box.max[d];
+  for (int d = 0; d < Dim; ++d) {  // periodic constraints (.inp, .msh, .vtu)
+    options.periodic[static_cast<std::size_t>(d)] = run.periodic[static_cast<std::size_t>(d)];
+    options.period[static_cast<std::size_t>(d)] = run.period[d];
+  }
   if (output.pieces)
     parallel::write_pvtu<Dim>(comm, output.path, piece.mesh, run.mesh.phases, options);
   else

@@ -65,6 +65,10 @@ struct MeshRun {
   // ghost (sequential: one); this rank's phase times.
   parallel::DistributedMesh<Dim> mesh;
   Box<Dim> face_box{};  // the exact coordinates of the nodes on each domain face (face_box)
+  // The scene's periodic axes (domain.periodic) and the lattice's period N_a·h along each
+  // axis (face_box.max = fl(face_box.min + period)): the writers' periodic constraints.
+  std::array<bool, Dim> periodic{};
+  Vec<Dim> period{};
   double bound = 0;
   quality::AspectStats aspect;              // of the whole mesh
   std::vector<PhaseFigures> phase_figures;  // per scene phase (Options::figures)

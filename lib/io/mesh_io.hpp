@@ -4,20 +4,30 @@
 //
 //   .vtu   VTK XML UnstructuredGrid, raw appended binary (UInt64 headers, little endian):
 //          cell data phase (Int32), partition (Int32), aspect_ratio (Float64);
-//          point data global_id (Int64), boundary (UInt8, bit f: on box face f); points
+//          point data global_id (Int64), boundary (UInt8, bit f: on box face f), and for a
+//          periodic mesh periodic_master (Int64: the full master's global id, or -1); points
 //          always with 3 components; field data phase_names (VTK String array, ASCII) and
 //          phase_ids (Int32), in phase-id order.
 //   .msh   Gmsh 4.1 ASCII: one physical group and one entity per phase (tag = phase id);
 //          per box face a curve (2D) or surface (3D) entity with its boundary lines or
-//          triangles, in a physical group named XMIN ... ZMAX.
+//          triangles, in a physical group named XMIN ... ZMAX. Periodic: $Periodic after
+//          $Elements, one link per periodic axis (max face entity → min face entity, the
+//          4×4 affine map, every slave-face node with its single-axis master).
 //   .inp   Abaqus: *NODE, one *ELEMENT block per phase, TYPE=CPS3|CPE3|C3D4, ELSET=name;
 //          *NSET XMIN ... ZMAX and CORNER0; *SURFACE XMIN_FACES ... over face ELSETs.
+//          Periodic: REF nodes n+1 ... (the last *NODE lines, at the max corner) in NSETs
+//          REF_X, REF_Y, REF_Z, then *EQUATION per slave and dof, u_s − u_m − Σ u_REF_a = 0
+//          over the axes along which s is shifted (node ids; ≤ 4 terms per line). Users
+//          constrain CORNER0 and the REF nodes, never a slave.
+// Periodic constraints (MeshWriteOptions::periodic) come from mesh/periodic_links.hpp:
+// exact translates across the face box, a mesh that is not periodic is a MeshingError.
 //   .mesh  Medit/INRIA, MeshVersionFormatted 2: element reference = phase id; boundary
 //          edges (2D) or triangles (3D) with reference face + 1; "# phase ID NAME" comments.
 // Box faces are numbered XMIN, XMAX, YMIN, YMAX, ZMIN, ZMAX = 0..5 (mesh/boundary.hpp).
 //
 // Numbers in ASCII formats are printed with the shortest text that reads back to the same
 // double, so every format round-trips coordinates bit for bit.
+#include <array>
 #include <cstdint>
 #include <map>
 #include <optional>
@@ -48,6 +58,21 @@ struct MeshWriteOptions {
   // the same whenever every face carries a node (always so for a whole mesh without voids).
   std::optional<Box3> face_box;
   PlaneKind plane = PlaneKind::stress;  // .inp in 2D
+  // Periodic axes (scene domain.periodic; z unused in 2D). With any set, the mesh must be
+  // periodic along them with respect to face_box (every node on a max face has its exact
+  // translate on the min face, mesh/periodic_links.hpp): the writers add the constraints
+  // (.inp REF nodes and *EQUATION, .msh $Periodic, .vtu periodic_master; .mesh nothing),
+  // and a mesh that is not periodic is a MeshingError naming the node.
+  std::array<bool, 3> periodic{};
+  // The translation T_a from the min face to the max face along each periodic axis (the
+  // lattice's N_a·h: face_box max = fl(min + T_a)); 0: face_box max − min. Only the .msh
+  // affine transform uses it.
+  std::array<double, 3> period{};
+  // A piece of a parallel run holds slaves whose master is on another rank: there the
+  // caller gives, per node, the full master's global id or -1 (parallel::periodic_masters),
+  // and write_vtu writes it as periodic_master. Empty: the links are taken from the mesh.
+  std::vector<GlobalId> periodic_master;
+  bool any_periodic() const { return periodic[0] || periodic[1] || periodic[2]; }
 };
 
 // Writes `m` in the format of `path`'s extension (or options.format). `phases` gives the names (msh physical
@@ -66,8 +91,9 @@ void write_vtu(const std::string& path, const mesh::SimplexMesh<Dim>& m,
                const std::vector<geometry::Phase>& phases, const MeshWriteOptions& options = {});
 
 // The .pvtu text listing `pieces` (file names relative to the .pvtu), declaring the arrays
-// write_vtu writes.
-std::string pvtu_text(const std::vector<std::string>& pieces);
+// write_vtu writes (`periodic`: the pieces have periodic_master, as write_vtu writes it for
+// MeshWriteOptions::any_periodic()).
+std::string pvtu_text(const std::vector<std::string>& pieces, bool periodic = false);
 
 struct LoadedMesh {
   int dimension = 0;   // 2 or 3: which of mesh2 / mesh3 holds the mesh
@@ -78,6 +104,16 @@ struct LoadedMesh {
   // Medit "# phase ID NAME" comments, meshio's field data), by id: `phases` names the
   // others "phase<id>". certify matches phases to the scene's by these names.
   std::map<int, std::string> phase_names_in_file;
+  // Periodic constraints the file carries (empty when none):
+  // .msh: the $Periodic links (MSH 4.1), node pairs as 0-based node indices of this mesh.
+  struct PeriodicLink {
+    int entity_dimension = 0, entity = 0, master_entity = 0;
+    std::vector<double> affine;  // as written: 16 values (row-major 4×4) or none
+    std::vector<std::pair<LocalId, LocalId>> nodes;  // (slave, master)
+  };
+  std::vector<PeriodicLink> periodic_links;
+  // .vtu / .pvtu: the point data periodic_master (per node, the full master's global id or -1).
+  std::vector<GlobalId> periodic_master;
 };
 
 // Reads what cisamr and other tools write (lib/io/README.md, "Reading meshes"):
@@ -85,7 +121,7 @@ struct LoadedMesh {
 //          zlib-compressed (vtkZLibDataCompressor); one piece
 //   .pvtu  its .vtu pieces, nodes merged by global_id (or else by exact coordinates)
 //   .vtk   legacy, ASCII or BINARY, UNSTRUCTURED_GRID (versions 2 to 5.1)
-//   .msh   Gmsh 4.1 and 2.2, ASCII and binary
+//   .msh   Gmsh 4.1 and 2.2, ASCII and binary ($Periodic of 4.1 into periodic_links)
 //   .mesh  Medit ASCII;  .inp  Abaqus (several element blocks, *ELSET);
 //   .node/.ele  TetGen (or Triangle): the two files of the named stem
 // Triangles or tetrahedra only: points and lines (and boundary triangles of a tetrahedral

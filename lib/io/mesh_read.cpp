@@ -75,6 +75,11 @@ LoadedMesh finish(RawMesh raw, const std::string& path) {
         id, it != raw.phase_names.end() ? it->second : "phase" + std::to_string(id), false});
     if (it != raw.phase_names.end()) result.phase_names_in_file.emplace(id, it->second);
   }
+  if (!raw.periodic_master.empty() && raw.periodic_master.size() != nodes)
+    throw InputError(path, "periodic_master", "has " + std::to_string(raw.periodic_master.size()) + " values for " +
+                                                  std::to_string(nodes) + " points");
+  result.periodic_links = std::move(raw.periodic_links);
+  result.periodic_master = std::move(raw.periodic_master);
   if (result.dimension == 2)
     fill_mesh(raw, result.mesh2);
   else

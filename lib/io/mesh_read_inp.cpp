@@ -1,5 +1,7 @@
 // Abaqus INP reader.
 
+#include <set>
+
 #include "core/error.hpp"
 #include "io/mesh_read_internal.hpp"
 
@@ -53,7 +55,9 @@ struct ElementSets {
 // An element's phase is the ELSET= of its *ELEMENT block, or when that has none, the first
 // *ELSET block (in file order) that lists it; sets get ids in order of appearance unless our writer's
 // "** cisamr phase ID NAME" comment gives one. *NSET, *SURFACE, materials, steps etc. are
-// ignored; *INCLUDE is refused (the included file would hold part of the mesh).
+// ignored; *INCLUDE is refused (the included file would hold part of the mesh). The nodes
+// our writer lists in a "** cisamr periodic reference nodes ID..." comment (REF_X ... of a
+// periodic mesh, in no element) are dropped; *EQUATION constraints are ignored.
 LoadedMesh read_inp(const std::string& path) {
   const MappedFile file(path);
   const std::string_view text = file.view();
@@ -66,6 +70,8 @@ LoadedMesh read_inp(const std::string& path) {
   enum class Block { none, nodes, triangles, tetrahedra, elset } block = Block::none;
   int block_set = -1;
   bool generate = false;
+  // Our writer's periodic REF nodes (ids announced by a comment) belong to no element: dropped.
+  std::set<long long> reference_nodes;
   std::size_t line_number = 0, pos = 0;
   std::vector<std::string_view> fields;  // reused: one allocation for the whole file
 
@@ -102,6 +108,16 @@ LoadedMesh read_inp(const std::string& path) {
     if (line.empty()) continue;
     if (line.substr(0, 2) == "**") {
       constexpr std::string_view kMarker = "** cisamr phase ";
+      constexpr std::string_view kReference = "** cisamr periodic reference nodes";
+      if (line.substr(0, kReference.size()) == kReference) {
+        std::string_view rest = line.substr(kReference.size());
+        while (!(rest = trim(rest)).empty()) {
+          const std::size_t space = rest.find(' ');
+          reference_nodes.insert(parse_int(rest.substr(0, space)));
+          rest = space == std::string_view::npos ? std::string_view() : rest.substr(space);
+        }
+        continue;
+      }
       if (line.substr(0, kMarker.size()) == kMarker) {
         std::string_view rest = line.substr(kMarker.size());
         const std::size_t space = rest.find(' ');
@@ -224,6 +240,17 @@ LoadedMesh read_inp(const std::string& path) {
   }
   const int unset_id = unset ? next_free() : 0;
   for (TaggedCells::Cell& c : kept) c.phase = c.phase >= 0 ? set_id[static_cast<std::size_t>(c.phase)] : unset_id;
+  if (!reference_nodes.empty()) {
+    std::size_t kept_nodes = 0;
+    for (std::size_t i = 0; i < node_tags.size(); ++i) {
+      if (reference_nodes.count(node_tags[i])) continue;
+      node_tags[kept_nodes] = node_tags[i];
+      for (std::size_t d = 0; d < 3; ++d) raw.coords[3 * kept_nodes + d] = raw.coords[3 * i + d];
+      ++kept_nodes;
+    }
+    node_tags.resize(kept_nodes);
+    raw.coords.resize(3 * kept_nodes);
+  }
   const TagMap map = sort_nodes_by_tag(raw, node_tags, path);
   cells.finish(raw, map, path);
   return finish(std::move(raw), path);

@@ -88,6 +88,8 @@ struct RawMesh {
   std::vector<std::int32_t> cell_partition;  // empty = all 0
   std::vector<GlobalId> node_global_id;     // empty = node index
   std::map<int, std::string> phase_names;   // from the file, when it has them
+  std::vector<LoadedMesh::PeriodicLink> periodic_links;  // .msh $Periodic (node indices)
+  std::vector<GlobalId> periodic_master;     // .vtu point data; empty = absent
 };
 
 // Whitespace-separated tokens with line numbers for errors.

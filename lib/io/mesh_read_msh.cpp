@@ -130,6 +130,12 @@ LoadedMesh read_msh(const std::string& path) {
   // (dimension, entity tag) → first physical tag, 0 when none.
   std::map<std::pair<int, long long>, int> entity_physical;
   bool seen_nodes = false, seen_elements = false;
+  struct PeriodicTags {
+    int entity_dimension = 0, entity = 0, master_entity = 0;
+    std::vector<double> affine;
+    std::vector<std::pair<long long, long long>> nodes;  // file node tags
+  };
+  std::vector<PeriodicTags> periodic;
 
   auto read_nodes = [&](std::array<long long, 4>& nodes, int n, MshValues& v) {
     for (int k = 0; k < n; ++k) {
@@ -282,8 +288,31 @@ LoadedMesh read_msh(const std::string& path) {
         }
       }
       s.expect("$EndElements");
+    } else if (section == "$Periodic" && v4) {
+      // numLinks; per link: entityDim entityTag entityTagMaster, numAffine values...,
+      // numCorrespondingNodes, then (node, master node) pairs.
+      MshValues v(s, binary, static_cast<int>(data_size), path, "$Periodic");
+      const long long links = v.count("$Periodic", 4);
+      for (long long l = 0; l < links; ++l) {
+        PeriodicTags link;
+        link.entity_dimension = static_cast<int>(v.integer());
+        link.entity = static_cast<int>(v.integer());
+        link.master_entity = static_cast<int>(v.integer());
+        const long long affine = v.size();
+        if (affine != 0 && affine != 16) v.fail("$Periodic: " + std::to_string(affine) + " affine values (0 or 16 expected)");
+        for (long long k = 0; k < affine; ++k) link.affine.push_back(v.real());
+        const long long pairs = v.count("periodic node pairs", 2);
+        link.nodes.reserve(static_cast<std::size_t>(pairs));
+        for (long long k = 0; k < pairs; ++k) {
+          const long long slave = v.size();
+          link.nodes.emplace_back(slave, v.size());
+        }
+        periodic.push_back(std::move(link));
+      }
+      v.done();
+      s.expect("$EndPeriodic");
     } else if (!section.empty() && section[0] == '$') {
-      s.skip_past("$End" + std::string(section.substr(1)));  // $NodeData, $Periodic, ...
+      s.skip_past("$End" + std::string(section.substr(1)));  // $NodeData, 2.2's $Periodic, ...
     } else {
       s.fail("expected a section such as $Nodes, got '" + std::string(section.substr(0, 40)) + "'");
     }
@@ -291,6 +320,17 @@ LoadedMesh read_msh(const std::string& path) {
   if (!seen_nodes || !seen_elements) throw InputError(path, "", "missing $Nodes or $Elements");
   const TagMap map = sort_nodes_by_tag(raw, node_tags, path);
   cells.finish(raw, map, path);
+  for (const PeriodicTags& link : periodic) {
+    LoadedMesh::PeriodicLink out{link.entity_dimension, link.entity, link.master_entity, link.affine, {}};
+    out.nodes.reserve(link.nodes.size());
+    for (const auto& [slave, master] : link.nodes) {
+      const std::int64_t a = map.index(slave), b = map.index(master);
+      if (a < 0 || b < 0)
+        throw InputError(path, "$Periodic", "node " + std::to_string(a < 0 ? slave : master) + " is not defined");
+      out.nodes.emplace_back(static_cast<LocalId>(a), static_cast<LocalId>(b));
+    }
+    raw.periodic_links.push_back(std::move(out));
+  }
   // The names of the cells' dimension: a boundary group may reuse a phase's tag.
   const int cell_dimension = raw.corners - 1;
   for (const auto& [key, name] : physical_names)

@@ -84,7 +84,7 @@ const VtkType* vtk_type(std::string_view name) {
 // What an unstructured grid needs, from either VTK dialect.
 struct GridArrays {
   std::size_t number_of_points = 0, number_of_cells = 0;
-  std::optional<DataValues> points, connectivity, offsets, types, phase, partition, global_id;
+  std::optional<DataValues> points, connectivity, offsets, types, phase, partition, global_id, periodic_master;
   std::map<int, std::string> phase_names;  // from field data
   // meshio's convention for Gmsh physical names: an integer field array NAME = [tag, dim].
   std::vector<std::tuple<std::string, std::int64_t, std::int64_t>> tag_dimension_names;
@@ -215,6 +215,11 @@ RawMesh assemble(GridArrays& g, const std::string& path) {
     if (g.global_id->is_real()) throw InputError(path, "global_id", "must be an integer array");
     raw.node_global_id.resize(g.global_id->size());
     for (std::size_t i = 0; i < g.global_id->size(); ++i) raw.node_global_id[i] = g.global_id->integer(i);
+  }
+  if (g.periodic_master) {
+    if (g.periodic_master->is_real()) throw InputError(path, "periodic_master", "must be an integer array");
+    raw.periodic_master.resize(g.periodic_master->size());
+    for (std::size_t i = 0; i < g.periodic_master->size(); ++i) raw.periodic_master[i] = g.periodic_master->integer(i);
   }
   raw.phase_names = g.phase_names;
   if (raw.phase_names.empty())
@@ -461,8 +466,11 @@ class VtuReader {
       const std::string name = a.attribute("Name").value();
       if (is_phase_array(name) || name == "partition") take_cell_array(g, name, decode(a));
     }
-    for (const pugi::xml_node a : piece.child("PointData").children("DataArray"))
-      if (std::string_view(a.attribute("Name").value()) == "global_id") g.global_id = decode(a);
+    for (const pugi::xml_node a : piece.child("PointData").children("DataArray")) {
+      const std::string_view name = a.attribute("Name").value();
+      if (name == "global_id") g.global_id = decode(a);
+      else if (name == "periodic_master") g.periodic_master = decode(a);
+    }
     std::vector<std::pair<std::string, DataValues>> field;
     for (const pugi::xml_node holder : {grid.child("FieldData"), piece.child("FieldData")})
       for (const pugi::xml_node a : holder.children()) {
@@ -804,6 +812,14 @@ RawMesh merge_pieces(std::vector<RawMesh>& pieces, const std::vector<std::string
   auto bits = [](double x) { return std::bit_cast<std::uint64_t>(x == 0 ? 0.0 : x); };
   bool any_partition = false;
   for (const RawMesh& p : pieces) any_partition = any_partition || !p.cell_partition.empty();
+  // periodic_master when every piece has it; a node's copies must agree.
+  const bool masters = by_global_id && !pieces.empty() &&
+                       std::all_of(pieces.begin(), pieces.end(), [](const RawMesh& p) { return !p.periodic_master.empty(); });
+  for (std::size_t k = 0; k < pieces.size() && masters; ++k)
+    if (pieces[k].periodic_master.size() != pieces[k].coords.size() / 3)
+      throw InputError(piece_paths[k], "periodic_master", "has " + std::to_string(pieces[k].periodic_master.size()) +
+                                                              " values for " + std::to_string(pieces[k].coords.size() / 3) +
+                                                              " points");
   for (std::size_t k = 0; k < pieces.size(); ++k) {
     RawMesh& p = pieces[k];
     if (p.corners == 0) continue;
@@ -828,6 +844,12 @@ RawMesh merge_pieces(std::vector<RawMesh>& pieces, const std::vector<std::string
         merged.coords.insert(merged.coords.end(), p.coords.begin() + static_cast<std::ptrdiff_t>(3 * n),
                              p.coords.begin() + static_cast<std::ptrdiff_t>(3 * n + 3));
         if (by_global_id) merged.node_global_id.push_back(p.node_global_id[n]);
+        if (masters) merged.periodic_master.push_back(p.periodic_master[n]);
+      } else if (masters && merged.periodic_master[static_cast<std::size_t>(id)] != p.periodic_master[n]) {
+        throw InputError(piece_paths[k], "periodic_master",
+                         "node with global id " + std::to_string(p.node_global_id[n]) + " has master " +
+                             std::to_string(p.periodic_master[n]) + " here and " +
+                             std::to_string(merged.periodic_master[static_cast<std::size_t>(id)]) + " in an earlier piece");
       }
       local[n] = id;
     }

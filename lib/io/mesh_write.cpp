@@ -16,6 +16,7 @@
 #include "io/mesh_io.hpp"
 #include "mesh/boundary.hpp"
 #include "mesh/metrics.hpp"
+#include "mesh/periodic_links.hpp"
 
 namespace cisamr::io {
 namespace {
@@ -153,6 +154,33 @@ mesh::BoundarySets<Dim> boundary_sets_for(const mesh::SimplexMesh<Dim>& m, const
   return mesh::boundary_sets(m, box);
 }
 
+// The periodic links the writers emit (options.periodic against the face box), or none.
+template <int Dim>
+struct PeriodicOutput {
+  bool any = false;
+  Box<Dim> faces{};
+  std::array<bool, Dim> axes{};
+  std::array<double, Dim> period{};  // T_a
+  mesh::PeriodicLinks<Dim> links;
+};
+
+template <int Dim>
+PeriodicOutput<Dim> periodic_output(const mesh::SimplexMesh<Dim>& m, const MeshWriteOptions& options) {
+  PeriodicOutput<Dim> out;
+  for (int a = 0; a < Dim; ++a) out.axes[static_cast<std::size_t>(a)] = options.periodic[static_cast<std::size_t>(a)];
+  for (bool a : out.axes) out.any = out.any || a;
+  if (!out.any) return out;
+  out.faces = mesh::bounding_box(m);
+  if (options.face_box)
+    for (int d = 0; d < Dim; ++d) out.faces.min[d] = options.face_box->min[d], out.faces.max[d] = options.face_box->max[d];
+  for (int a = 0; a < Dim; ++a) {
+    const double t = options.period[static_cast<std::size_t>(a)];
+    out.period[static_cast<std::size_t>(a)] = t != 0 ? t : out.faces.max[a] - out.faces.min[a];
+  }
+  out.links = mesh::periodic_links<Dim>(m, out.faces, out.axes);
+  return out;
+}
+
 // The nodes of a cell facet, in their outward order (mesh::FacetVertices).
 template <int Dim>
 std::array<LocalId, Dim> facet_nodes(const mesh::SimplexMesh<Dim>& m, const mesh::CellFacet& f) {
@@ -217,7 +245,24 @@ void write_vtu_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m,
     int components;
     std::size_t bytes;
   };
-  const Array arrays[] = {
+  // periodic_master (Int64): the full master's global id, or -1, only for periodic meshes.
+  std::vector<GlobalId> periodic_master;
+  if (options.any_periodic()) {
+    if (!options.periodic_master.empty()) {
+      if (options.periodic_master.size() != nodes)
+        throw std::invalid_argument("write_mesh: periodic_master has the wrong size");
+      periodic_master = options.periodic_master;
+    } else {
+      periodic_master.assign(nodes, -1);
+      const auto gid = [&](LocalId n) {
+        return m.node_global_id.empty() ? GlobalId(n) : m.node_global_id[static_cast<std::size_t>(n)];
+      };
+      for (const mesh::PeriodicSlave<Dim>& s : periodic_output(m, options).links.slaves)
+        periodic_master[static_cast<std::size_t>(s.node)] = gid(s.master);
+    }
+  }
+  const bool periodic = options.any_periodic();
+  std::vector<Array> arrays = {
       {"PointData", "Int64", "global_id", 1, nodes * 8},
       {"PointData", "UInt8", "boundary", 1, nodes},
       {"CellData", "Int32", "phase", 1, cells * 4},
@@ -228,6 +273,7 @@ void write_vtu_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m,
       {"Cells", wide_offsets ? "Int64" : "Int32", "offsets", 1, cells * offset_size},
       {"Cells", "UInt8", "types", 1, cells},
   };
+  if (periodic) arrays.insert(arrays.begin() + 2, {"PointData", "Int64", "periodic_master", 1, nodes * 8});
 
   std::string xml;
   xml += "<?xml version=\"1.0\"?>\n";
@@ -255,8 +301,8 @@ void write_vtu_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m,
   // care; meshio (5.x) rewrites offsets one by one while looking tags up by offset, and
   // mixes up two arrays when a rewritten offset equals a later raw one: with the reverse
   // layout the tag it must find always comes first in the document.
-  constexpr std::size_t kArrays = sizeof(arrays) / sizeof(arrays[0]);
-  std::uint64_t offsets_of[kArrays];
+  const std::size_t kArrays = arrays.size();
+  std::vector<std::uint64_t> offsets_of(kArrays);
   std::uint64_t offset = 0;
   for (std::size_t k = kArrays; k-- > 0;) {
     offsets_of[k] = offset;
@@ -308,6 +354,7 @@ void write_vtu_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m,
   else
     write_array_raw(file, m.cell_partition);
   write_array_raw(file, m.cell_phase);
+  if (periodic) write_array_raw(file, periodic_master);
   write_array_raw(file, boundary_sets_for(m, options).node_faces);
   if (m.node_global_id.empty())
     write_array_chunked<std::int64_t>(file, nodes, [](std::size_t i) { return std::int64_t(i); });
@@ -468,6 +515,40 @@ void write_msh_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m,
     }
   }
   out << "$EndElements\n";
+
+  // Periodic meshes: one link per periodic axis a, from the a-max face entity (slave) to
+  // the a-min face entity (master), with the affine map master → slave (identity plus T_a
+  // in row a, column 4) and every node of the slave face with its single-axis master.
+  // Gmsh skips a link whose entities it cannot find, so both faces must carry facets.
+  const PeriodicOutput<Dim> periodic = periodic_output(m, options);
+  if (periodic.any) {
+    const auto has_entity = [&](int f) { return std::find(faces.begin(), faces.end(), f) != faces.end(); };
+    std::vector<int> axes;
+    for (int a = 0; a < Dim; ++a)
+      if (periodic.axes[static_cast<std::size_t>(a)] && has_entity(2 * a) && has_entity(2 * a + 1)) axes.push_back(a);
+    out << "$Periodic\n";
+    out.integer(static_cast<long long>(axes.size())) << '\n';
+    for (int a : axes) {
+      out.integer(Dim - 1) << ' ';
+      out.integer(2 * a + 2) << ' ';
+      out.integer(2 * a + 1) << "\n16";
+      for (int i = 0; i < 16; ++i) {
+        const int row = i / 4, column = i % 4;
+        const double value = column == 3 && row == a ? periodic.period[static_cast<std::size_t>(a)] : row == column ? 1 : 0;
+        out << ' ', out.real(value);
+      }
+      out << '\n';
+      std::size_t pairs = 0;
+      for (const mesh::PeriodicSlave<Dim>& s : periodic.links.slaves) pairs += (s.shift >> a) & 1;
+      out.integer(static_cast<long long>(pairs)) << '\n';
+      for (const mesh::PeriodicSlave<Dim>& s : periodic.links.slaves)
+        if ((s.shift >> a) & 1) {
+          out.integer(s.node + 1LL) << ' ';
+          out.integer(s.axis_master[static_cast<std::size_t>(a)] + 1LL) << '\n';
+        }
+    }
+    out << "$EndPeriodic\n";
+  }
   out.flush();
 }
 
@@ -511,6 +592,56 @@ void write_id_lines(TextWriter& out, const std::vector<long long>& ids) {
   }
 }
 
+// Periodic constraints (docs/periodic-design.md §5). One REF node per periodic axis, ids
+// n+1 ... in axis order, at the max corner of the face box: their lines close the mesh's
+// *NODE block (a second *NODE block makes meshio drop the first), announced by a comment
+// before it that our reader takes to skip them (they belong to no element).
+template <int Dim>
+std::array<long long, Dim> reference_nodes(const mesh::SimplexMesh<Dim>& m, const PeriodicOutput<Dim>& periodic) {
+  std::array<long long, Dim> ref{};
+  long long next = static_cast<long long>(m.node_count());
+  for (int a = 0; a < Dim; ++a) ref[static_cast<std::size_t>(a)] = periodic.axes[static_cast<std::size_t>(a)] ? ++next : -1;
+  return ref;
+}
+
+// After the mesh: each REF node alone in NSET REF_X / REF_Y / REF_Z, then one equation per
+// slave and dof, slaves in node order: s - m - the REF nodes of the axes s is shifted along.
+// Node ids, not sets (CalculiX); at most 4 terms per data line (Abaqus).
+template <int Dim>
+void write_inp_constraints(TextWriter& out, const mesh::SimplexMesh<Dim>& m, const PeriodicOutput<Dim>& periodic) {
+  const std::array<long long, Dim> ref = reference_nodes(m, periodic);
+  out << "** cisamr periodic constraints. Each node s on a periodic max face is tied to its master m\n"
+         "** (s moved to the min face of every axis it lies on the max face of; CORNER0 for the far\n"
+         "** corner) by one equation per dof d: u(s,d) - u(m,d) - sum of u(REF_a,d) over those axes a = 0.\n"
+         "** The displacement of REF_a is the jump of u across the cell along a: for a macroscopic\n"
+         "** strain E, u(REF_a) = E . (T_a e_a), T_a the period. Constrain CORNER0 (rigid motion)\n"
+         "** and the REF nodes, never a slave (each slave dof is eliminated by its equation).\n";
+  for (int a = 0; a < Dim; ++a) {
+    if (ref[static_cast<std::size_t>(a)] < 0) continue;
+    out << "*NSET, NSET=REF_" << "XYZ"[a] << '\n';
+    out.integer(ref[static_cast<std::size_t>(a)]) << '\n';
+  }
+  if (periodic.links.slaves.empty()) return;
+  out << "*EQUATION\n";
+  for (const mesh::PeriodicSlave<Dim>& s : periodic.links.slaves)
+    for (int d = 1; d <= Dim; ++d) {
+      const int terms = 2 + std::popcount(static_cast<unsigned>(s.shift));
+      out.integer(terms) << '\n';
+      int written = 0;
+      const auto term = [&](long long node, const char* coefficient) {
+        if (written > 0) out << (written % 4 == 0 ? "\n" : ", ");
+        out.integer(node) << ", ";
+        out.integer(d) << ", " << coefficient;
+        ++written;
+      };
+      term(s.node + 1LL, "1.0");
+      term(s.master + 1LL, "-1.0");
+      for (int a = 0; a < Dim; ++a)
+        if ((s.shift >> a) & 1) term(ref[static_cast<std::size_t>(a)], "-1.0");
+      out << '\n';
+    }
+}
+
 template <int Dim>
 void write_inp_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m,
                     const std::vector<geometry::Phase>& phases, const MeshWriteOptions& options) {
@@ -519,14 +650,28 @@ void write_inp_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m,
   const std::size_t nodes = m.node_count(), cells = m.cell_count();
   const PhaseGroups groups = group_by_phase(m.cell_phase);
   const char* element_type = Dim == 3 ? "C3D4" : options.plane == PlaneKind::strain ? "CPE3" : "CPS3";
+  const PeriodicOutput<Dim> periodic = periodic_output(m, options);  // throws before any output
+  const std::array<long long, Dim> ref = reference_nodes(m, periodic);
   TextWriter out(file);
   out << "*HEADING\ncisamr mesh: ";
   out.integer(static_cast<long long>(nodes)) << " nodes, ";
   out.integer(static_cast<long long>(cells)) << (Dim == 2 ? " triangles\n" : " tetrahedra\n");
+  if (periodic.any) {
+    out << "** cisamr periodic reference nodes";
+    for (long long id : ref)
+      if (id >= 0) out << ' ', out.integer(id);
+    out << '\n';
+  }
   out << "*NODE\n";
   for (std::size_t n = 0; n < nodes; ++n) {
     out.integer(static_cast<long long>(n + 1));
     for (int d = 0; d < Dim; ++d) out << ", ", out.real_within(m.coords[n * Dim + d], kAbaqusNumberWidth);
+    out << '\n';
+  }
+  for (long long id : ref) {
+    if (id < 0) continue;
+    out.integer(id);
+    for (int d = 0; d < Dim; ++d) out << ", ", out.real_within(periodic.faces.max[d], kAbaqusNumberWidth);
     out << '\n';
   }
   for (std::size_t g = 0; g < groups.ids.size(); ++g) {
@@ -584,6 +729,7 @@ void write_inp_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m,
       out.integer(k) << '\n';
     }
   }
+  if (periodic.any) write_inp_constraints(out, m, periodic);
   out.flush();
 }
 
@@ -686,7 +832,7 @@ template void write_vtu<2>(const std::string&, const mesh::Mesh2&, const std::ve
 template void write_vtu<3>(const std::string&, const mesh::Mesh3&, const std::vector<geometry::Phase>&,
                            const MeshWriteOptions&);
 
-std::string pvtu_text(const std::vector<std::string>& pieces) {
+std::string pvtu_text(const std::vector<std::string>& pieces, bool periodic) {
   // The arrays write_vtu_file declares (field data is read from the pieces).
   std::string xml;
   xml += "<?xml version=\"1.0\"?>\n";
@@ -695,6 +841,7 @@ std::string pvtu_text(const std::vector<std::string>& pieces) {
   xml += "    <PPointData>\n";
   xml += "      <PDataArray type=\"Int64\" Name=\"global_id\"/>\n";
   xml += "      <PDataArray type=\"UInt8\" Name=\"boundary\"/>\n";
+  if (periodic) xml += "      <PDataArray type=\"Int64\" Name=\"periodic_master\"/>\n";
   xml += "    </PPointData>\n";
   xml += "    <PCellData Scalars=\"phase\">\n";
   xml += "      <PDataArray type=\"Int32\" Name=\"phase\"/>\n";
