@@ -7,6 +7,7 @@
 #include "io/mesh_io.hpp"
 #include "parallel/collective.hpp"
 #include "parallel/exchange.hpp"
+#include "parallel/periodic_masters.hpp"
 
 namespace cisamr::parallel {
 namespace fs = std::filesystem;
@@ -23,17 +24,32 @@ void write_pvtu(const Comm& comm, const std::string& pvtu_path, const mesh::Simp
   // Joins the caller's io::OutputSet when one is open; otherwise the pieces and the .pvtu
   // are renamed into place together once every rank has written.
   io::OutputSet outputs;
+  // A periodic mesh's pieces: each node's full master may be on another rank (collective).
+  io::MeshWriteOptions piece_options;
+  const io::MeshWriteOptions* used = &options;
+  if (options.any_periodic() && options.periodic_master.empty()) {
+    if (!options.face_box) throw std::invalid_argument("write_pvtu: a periodic mesh's pieces need options.face_box");
+    Box<Dim> faces;
+    std::array<bool, Dim> axes{};
+    for (int d = 0; d < Dim; ++d) {
+      faces.min[d] = options.face_box->min[d], faces.max[d] = options.face_box->max[d];
+      axes[static_cast<std::size_t>(d)] = options.periodic[static_cast<std::size_t>(d)];
+    }
+    piece_options = options;
+    piece_options.periodic_master = periodic_masters<Dim>(comm, piece, faces, axes);
+    used = &piece_options;
+  }
   run_collectively(comm, [&] {
     if (fs::path(pvtu_path).extension() != ".pvtu")
       throw InputError(pvtu_path, "", "a parallel output must end in .pvtu");
-    io::write_vtu(piece_path(pvtu_path, comm.rank()), piece, phases, options);
+    io::write_vtu(piece_path(pvtu_path, comm.rank()), piece, phases, *used);
   });
   run_collectively(comm, [&] {
     if (comm.rank() != 0) return;
     io::AtomicFile file(pvtu_path);
     std::vector<std::string> pieces;
     for (int r = 0; r < comm.size(); ++r) pieces.push_back(fs::path(piece_path(pvtu_path, r)).filename().string());
-    file.write(io::pvtu_text(pieces));
+    file.write(io::pvtu_text(pieces, options.any_periodic()));
     file.commit();
   });
   run_collectively(comm, [&] { outputs.commit(); });

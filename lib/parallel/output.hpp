@@ -22,7 +22,9 @@ std::string piece_path(const std::string& pvtu_path, int rank);
 // place (inside a caller's open OutputSet, the caller's commit does). A failure anywhere
 // deletes what this call wrote on every rank and is thrown on every rank (collective.hpp).
 // The pieces' boundary bits refer to `options.face_box`: give the whole domain's (unset,
-// each piece's own bounding box would be taken).
+// each piece's own bounding box would be taken). With options.periodic, each piece gets
+// periodic_master through one exchange (periodic_masters.hpp; face_box required), and the
+// .pvtu declares it.
 template <int Dim>
 void write_pvtu(const Comm& comm, const std::string& pvtu_path, const mesh::SimplexMesh<Dim>& piece,
                 const std::vector<geometry::Phase>& phases = {}, const io::MeshWriteOptions& options = {});
