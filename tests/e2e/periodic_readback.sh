@@ -3,9 +3,14 @@
 # finds the nodes of each max face to be the min face's translated by the period, bit for
 # bit, with no node off a face by rounding; gmsh -check accepts the .msh; a broken copy
 # (one max-face node moved by one ulp) is caught, so the check can fail.
-# usage: periodic_readback.sh CISAMR
+# The constraints (docs/periodic-design.md §5): gmsh re-reads the .msh and writes it again
+# (gmsh f.msh -0 -o g.msh, MSH 4.1) with the same $Periodic links (entities, affine map, node
+# pairs); meshio reads the .vtu's periodic_master, each master the exact translate of its
+# node; with MPI, the .pvtu pieces of `mpiexec -n 3` carry the same masters (by global id)
+# as the gathered .vtu, and the .inp written with --gather equals the sequential one.
+# usage: periodic_readback.sh CISAMR [MPIEXEC]
 set -u
-cisamr=$1
+cisamr=$1 mpiexec=${2:-}
 dir=$(mktemp -d)
 trap 'rm -rf "$dir"' EXIT
 fail() { echo "FAIL: $*"; exit 1; }
@@ -57,4 +62,80 @@ m.points[on, 0] = np.nextafter(10.0, 0.0)
 meshio.write(sys.argv[2], m)
 PY
 if /usr/bin/python3 -c "$check" "$dir/broken.vtu" > /dev/null; then fail "the check passes a broken mesh"; fi
+
+# gmsh re-reads our $Periodic (a link whose entity it cannot find would desynchronise it)
+# and writes the same links: node tags are kept, so the pairs compare by tag. (Debian's
+# gmsh warns that it lacks ANN to match nodes itself; it keeps the pairs it read.)
+gmsh "$dir/rve.msh" -0 -format msh41 -o "$dir/g.msh" > "$dir/gmsh0.log" 2>&1 || fail "gmsh cannot re-read the .msh: $(tail -3 "$dir/gmsh0.log")"
+/usr/bin/python3 - "$dir/rve.msh" "$dir/g.msh" <<'PY' || fail "gmsh's \$Periodic differs from ours"
+import sys
+def periodic(path):
+    lines = open(path).read().split("\n")
+    if "$Periodic" not in lines:
+        return None
+    i = lines.index("$Periodic") + 1
+    links = {}
+    for _ in range(int(lines[i])):
+        entities = tuple(map(int, lines[i + 1].split()))
+        affine = [float(x) for x in lines[i + 2].split()]
+        n = int(lines[i + 3])
+        pairs = sorted(tuple(map(int, lines[i + 4 + k].split())) for k in range(n))
+        links[entities] = (affine, pairs)
+        i += 3 + n
+    return links
+ours, theirs = periodic(sys.argv[1]), periodic(sys.argv[2])
+if not ours or len(ours) != 2:
+    print("our .msh has no $Periodic link per axis:", ours and list(ours)); sys.exit(1)
+if ours != theirs:
+    print("ours", {k: (v[0], len(v[1])) for k, v in ours.items()}, "gmsh", theirs and {k: (v[0], len(v[1])) for k, v in theirs.items()}); sys.exit(1)
+print("gmsh re-read: %d links, %d node pairs, identical" % (len(ours), sum(len(v[1]) for v in ours.values())))
+PY
+
+# meshio reads periodic_master: -1 off the max faces; elsewhere the global id of the node at
+# the exact translate (max coordinates moved to the min face, the others bit-equal).
+masters='
+import sys, meshio, numpy as np
+m = meshio.read(sys.argv[1])
+pm, gid, p = m.point_data["periodic_master"], m.point_data["global_id"], m.points[:, :2]
+index = {g: i for i, g in enumerate(gid.tolist())}
+lo, hi = 0.0, 10.0
+bad = slaves = 0
+for i in range(len(p)):
+    on_max = p[i] == hi
+    if not on_max.any():
+        bad += pm[i] != -1; continue
+    slaves += 1
+    j = index.get(int(pm[i]))
+    if j is None: bad += 1; continue
+    want = np.where(on_max, lo, p[i])
+    bad += not (p[j] == want).all()
+print("meshio %s: %d slaves, %d wrong masters" % (sys.argv[1].rsplit("/", 1)[-1], slaves, bad))
+sys.exit(1 if bad or slaves < 20 else 0)
+'
+/usr/bin/python3 -c "$masters" "$dir/rve.vtu" || fail "meshio: periodic_master of the .vtu"
+
+if [ -n "$mpiexec" ]; then
+  run_mpi() { local n=$1; shift; timeout 60 "$mpiexec" -n "$n" --oversubscribe --allow-run-as-root "$@"; }
+  run_mpi 3 "$cisamr" mesh "$dir/rve.json" -o "$dir/par.pvtu" -q || fail "mpiexec -n 3: .pvtu"
+  run_mpi 3 "$cisamr" mesh "$dir/rve.json" -o "$dir/whole.vtu" --gather -q || fail "mpiexec -n 3: --gather .vtu"
+  grep -q 'Name="periodic_master"' "$dir/par.pvtu" || fail "the .pvtu does not declare periodic_master"
+  /usr/bin/python3 -c "$masters" "$dir/whole.vtu" || fail "meshio: periodic_master of the gathered .vtu"
+  # Each piece alone: node by node (global id), the master the gathered mesh gives.
+  /usr/bin/python3 - "$dir/whole.vtu" "$dir"/par_*.vtu <<'PY' || fail "the pieces' periodic_master differ from the gathered mesh's"
+import sys, meshio
+def masters(path):
+    m = meshio.read(path)
+    return dict(zip(m.point_data["global_id"].tolist(), m.point_data["periodic_master"].tolist()))
+whole = masters(sys.argv[1])
+bad = remote = slaves = 0
+for piece in sys.argv[2:]:
+    part = masters(piece)
+    for g, q in part.items():
+        bad += whole.get(g) != q
+        slaves += q >= 0
+        remote += q >= 0 and q not in part
+print("%d pieces: %d slave copies, %d with the master on another rank, %d mismatches" % (len(sys.argv) - 2, slaves, remote, bad))
+sys.exit(1 if bad or slaves == 0 else 0)
+PY
+fi
 echo "periodic read-back: ok"
