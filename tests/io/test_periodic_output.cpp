@@ -10,7 +10,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cctype>
 #include <cmath>
+#include <cstdlib>
 
 #include "core/error.hpp"
 #include "driver/driver.hpp"
@@ -249,6 +251,48 @@ TEST(PeriodicOutput, NonPeriodicFilesCarryNoneOfIt) {
   }
   EXPECT_EQ(pvtu_text({"a.vtu"}).find("periodic_master"), std::string::npos);
   EXPECT_NE(pvtu_text({"a.vtu"}, true).find("<PDataArray type=\"Int64\" Name=\"periodic_master\"/>"), std::string::npos);
+}
+
+// CalculiX through the 3D constraints (corner equations of 5 terms on 2 lines): the six unit
+// strains of validation/fe/homogenise.py on a periodic tet lattice of one material come out
+// uniform, and the effective stiffness is the material's (ccx prints 7 digits).
+TEST(PeriodicOutput, CalculixHomogenisesA3dLatticeOfOneMaterial) {
+  if (std::system("command -v ccx > /dev/null 2>&1") != 0) GTEST_SKIP() << "ccx (CalculiX) not found";
+  TempDir dir;
+  const double h = 0.25;
+  mesh::Mesh3 m = lattice_mesh<3>(4, 0.0, h, true);
+  for (std::size_t c = 0; c < m.cell_count(); ++c) m.cell_phase[c] = c % 3 == 0 ? 2 : 1;  // two ELSETs, one material
+  const Box3 faces = lattice_box<3>(4, 0.0, h);
+  write_mesh<3>(dir.file("m.inp"), m, {{1, "matrix", false}, {2, "other", false}},
+                periodic_options<3>(faces, {true, true, true}, {4 * h, 4 * h, 4 * h}));
+  const std::string command = "/usr/bin/python3 " CISAMR_SOURCE_DIR "/validation/fe/homogenise.py " + dir.file("m.inp") +
+                              " --material matrix=1000,0.25 --material other=1000,0.25 --json " + dir.file("r.json") +
+                              " > " + dir.file("log.txt") + " 2>&1";
+  ASSERT_EQ(std::system(command.c_str()), 0) << read_text(dir.file("log.txt"));
+  std::printf("%s", read_text(dir.file("log.txt")).c_str());
+  const std::string json = read_text(dir.file("r.json"));
+  const auto number = [&](const std::string& key) {
+    const std::size_t at = json.find("\"" + key + "\": ");
+    return at == std::string::npos ? -1.0 : std::strtod(json.c_str() + at + key.size() + 4, nullptr);
+  };
+  EXPECT_LE(number("max_strain_deviation"), 1e-6) << json;
+  EXPECT_EQ(number("slaves"), 125 - 64);
+  // E 1000, nu 0.25: lambda = mu = 400; C11 = 1200, C12 = 400, C44 = 400.
+  const std::size_t at = json.find("\"stiffness\": [");
+  ASSERT_NE(at, std::string::npos);
+  std::vector<double> c;
+  const char* p = json.c_str() + at + 14;
+  for (int k = 0; k < 36; ++k) {
+    while (*p && !(std::isdigit(static_cast<unsigned char>(*p)) || *p == '-')) ++p;
+    char* end;
+    c.push_back(std::strtod(p, &end));
+    p = end;
+  }
+  for (int i = 0; i < 6; ++i)
+    for (int j = 0; j < 6; ++j) {
+      const double want = i < 3 && j < 3 ? (i == j ? 1200 : 400) : i == j ? 400 : 0;
+      EXPECT_NEAR(c[static_cast<std::size_t>(6 * i + j)], want, 1e-6 * 1200) << "C" << i + 1 << j + 1;
+    }
 }
 
 // ---- real 2D periodic meshes
