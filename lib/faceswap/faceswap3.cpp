@@ -66,30 +66,45 @@ class Swapper {
   std::vector<radapt::EdgeCut> trial_cuts_;
   radapt::EdgeIndex trial_index_;
   std::vector<geometry::Crossing> crossings_;
+  std::vector<std::int32_t> plane_candidates_;
 
+  const grid::Lattice3& lattice() const { return forest_.lattice(); }
   const Vec3& pos(std::int32_t n) const { return nodes_.position[static_cast<std::size_t>(n)]; }
+  // Node n seen at frame point `frame` (lattice.hpp): + the period where the frame is at P.
+  Vec3 frame_pos(std::int32_t n, const LatticePoint3& frame) const {
+    return lattice().shifted(pos(n), lattice().image_shift(frame));
+  }
   PhaseMask mask(std::int32_t n) const { return nodes_.mask[static_cast<std::size_t>(n)]; }
   LatticeKey3 key(std::int32_t n) const { return nodes_.key[static_cast<std::size_t>(n)]; }
   bool is_void(int phase) const { return oracle_.scene().phases[static_cast<std::size_t>(phase)].is_void; }
 
-  // The cut point of the edge between two nodes whose ends stay strictly inside different
-  // phases: from radapt's table (an edge of the honeycomb) or computed here (a new edge),
-  // on the segment from the smaller key. `leaf` gives the coarse cube for the oracle's
-  // candidates (the segment lies in its closure).
-  bool cut_point(std::int32_t a, std::int32_t b, std::int32_t leaf, Vec3& point, stencil3::PointId& id) {
-    if (const std::int32_t e = nodes_.edge(key(a), key(b)); e >= 0) {
+  // The cut point of the edge between two nodes (seen at frame points fa, fb) whose ends
+  // stay strictly inside different phases: from radapt's table (an edge of the honeycomb)
+  // or computed here (a new edge), on the segment from the smaller key, in the edge's frame
+  // (radapt::EdgeFrame), and returned in the caller's. `leaf` gives the coarse cube for the
+  // oracle's candidates (the segment lies in its closure; an edge on a periodic plane asks
+  // for its own).
+  bool cut_point(std::int32_t a, std::int32_t b, const LatticePoint3& fa, const LatticePoint3& fb, std::int32_t leaf,
+                 Vec3& point, stencil3::PointId& id) {
+    radapt::EdgeFrame frame = radapt::edge_frame(lattice(), fa, fb);
+    if (const std::int32_t e = nodes_.edge(frame.lo(), frame.hi()); e >= 0) {
       const radapt::EdgeCut& c = nodes_.edges[static_cast<std::size_t>(e)];
-      point = c.point, id = {c.lo, c.hi};
+      point = lattice().shifted(c.point, frame.shift), id = {c.lo, c.hi};
       return true;
     }
-    if (key(b) < key(a)) std::swap(a, b);
-    const std::pair<LatticeKey3, LatticeKey3> k{key(a), key(b)};
+    if (grid::key3(frame.b) < grid::key3(frame.a)) std::swap(a, b), std::swap(frame.a, frame.b);
+    const std::pair<LatticeKey3, LatticeKey3> k{grid::key3(frame.a), grid::key3(frame.b)};
     auto [it, inserted] = trial_index_.try_emplace(k, static_cast<std::int32_t>(trial_cuts_.size()));
     if (inserted) {
       radapt::EdgeCut c;
       c.lo = k.first, c.hi = k.second;
-      const Vec3 &pa = pos(a), &pb = pos(b);
-      oracle_.crossings(pa, pb, g_.candidates_of_tet(leaf), crossings_);
+      const Vec3 pa = frame_pos(a, frame.a), pb = frame_pos(b, frame.b);
+      if (frame.on_periodic_plane(lattice())) {
+        oracle_.candidates(radapt::segment_box(pa, pb), plane_candidates_);
+        oracle_.crossings(pa, pb, plane_candidates_, crossings_);
+      } else {
+        oracle_.crossings(pa, pb, g_.candidates_of_tet(leaf), crossings_);
+      }
       const geometry::Crossing* chosen = radapt::crossing_between(crossings_, mask(a), mask(b));
       if (chosen != nullptr) {
         for (int d = 0; d < 3; ++d) c.point[d] = pa[d] + chosen->t * (pb[d] - pa[d]);
@@ -100,7 +115,7 @@ class Swapper {
     }
     const radapt::EdgeCut& c = trial_cuts_[static_cast<std::size_t>(it->second)];
     if (!c.found) return false;  // no crossing where the signs say there is one: do not swap here
-    point = c.point, id = {c.lo, c.hi};
+    point = lattice().shifted(c.point, frame.shift), id = {c.lo, c.hi};
     return true;
   }
 
@@ -114,17 +129,20 @@ class Swapper {
     std::array<stencil3::PointId, 4> id{};
     for (int i = 0; i < 4; ++i) {
       const auto k = static_cast<std::size_t>(i);
-      p[k] = pos(node[k]), m[k] = mask(node[k]), id[k] = {key(node[k]), key(node[k])};
+      p[k] = frame_pos(node[k], lattice[k]), m[k] = mask(node[k]), id[k] = {key(node[k]), key(node[k])};
     }
     const auto o = stencil3::outcome(lattice, p, m, id, [&](int e, Vec3& point, stencil3::PointId& pid) {
       if (leaf_edges != nullptr) {
         const std::int32_t ei = (*leaf_edges)[static_cast<std::size_t>(e)];
         if (ei < 0) return false;
         const radapt::EdgeCut& c = nodes_.edges[static_cast<std::size_t>(ei)];
-        point = c.point, pid = {c.lo, c.hi};
+        const auto ea = tet::kEdges[e][0], eb = tet::kEdges[e][1];
+        const auto shift = static_cast<std::uint8_t>(this->lattice().image_shift(lattice[ea]) & this->lattice().image_shift(lattice[eb]));
+        point = this->lattice().shifted(c.point, shift), pid = {c.lo, c.hi};
         return true;
       }
-      return cut_point(node[tet::kEdges[e][0]], node[tet::kEdges[e][1]], leaf, point, pid);
+      return cut_point(node[tet::kEdges[e][0]], node[tet::kEdges[e][1]], lattice[tet::kEdges[e][0]],
+                       lattice[tet::kEdges[e][1]], leaf, point, pid);
     });
     using Kind = stencil3::Outcome::Kind;
     if (o.kind == Kind::unsplittable) return kInvalid;
@@ -159,7 +177,7 @@ class Swapper {
     for (const auto& e : tet::kEdges) {
       LatticePoint3 m{};
       for (int d = 0; d < 3; ++d) m[d] = (v[e[0]][d] + v[e[1]][d]) / 2;
-      if (nodes_.id(grid::key3(m)) >= 0) return true;
+      if (nodes_.id(grid::key3(lattice().canonical_point(m))) >= 0) return true;
     }
     return false;
   }
@@ -179,7 +197,8 @@ class Swapper {
 
   // Fills one cube's half for the face on the side of local corner bp along `axis`.
   // False when the cube does not qualify or no re-tetrahedralisation is valid.
-  bool make_half(const std::array<std::int64_t, 3>& cube, int level, int axis, int bp, Half& h) {
+  bool make_half(std::array<std::int64_t, 3> cube, int level, int axis, int bp, Half& h) {
+    cube = forest_.canonical(level, grid::TetCode{cube, 0}).cube;  // each half in its own cube's frame
     const int parity = grid::cube_parity(cube);
     const int other1 = (axis + 1) % 3, other2 = (axis + 2) % 3;
     const int bq = bp ^ (1 << other1) ^ (1 << other2);
@@ -202,7 +221,7 @@ class Swapper {
       LatticePoint3 p{cube[0] + (b & 1), cube[1] + ((b >> 1) & 1), cube[2] + ((b >> 2) & 1)};
       for (int d = 0; d < 3; ++d) p[d] <<= shift;
       h.point[static_cast<std::size_t>(i)] = p;
-      h.node[static_cast<std::size_t>(i)] = nodes_.id(grid::key3(p));
+      h.node[static_cast<std::size_t>(i)] = nodes_.id(grid::key3(lattice().canonical_point(p)));
       if (h.node[static_cast<std::size_t>(i)] < 0) return false;
     }
     // The octahedron around body diagonal p–x_q (ring q, e1, x_p, e2) or q–x_p (ring p, e1, x_q, e2).
@@ -231,7 +250,9 @@ class Swapper {
 
   void find_candidates() {
     const int max_level = forest_.lattice().max_level;
-    std::unordered_map<LatticeKey3, std::uint8_t> seen;  // apex key → axes already examined
+    // The pairs already examined, by the face they share: (level, the lower cube, axis), in
+    // canonical codes, so the candidates are those of every pair whatever the forest order.
+    std::unordered_map<LatticeKey3, std::uint64_t> seen;  // lower cube's min corner → bit 3·level + axis
     for (std::int32_t t = 0; t < static_cast<std::int32_t>(forest_.size()); ++t) {
       advance_sometimes(options_.progress, t, static_cast<std::int64_t>(forest_.size()));
       if (!forest_.is_leaf(t) || forest_.kind(t) != tet::Kind::corner) continue;
@@ -243,20 +264,36 @@ class Swapper {
       const grid::TetCode code = forest_.code(t);
       const int level = forest_.tet(t).level;
       const int bp = grid::kCubeTets[static_cast<std::size_t>(grid::cube_parity(code.cube))][code.local][0];
-      LatticePoint3 apex{code.cube[0] + (bp & 1), code.cube[1] + ((bp >> 1) & 1), code.cube[2] + ((bp >> 2) & 1)};
-      for (int d = 0; d < 3; ++d) apex[d] <<= (max_level - level);
-      const LatticeKey3 apex_key = grid::key3(apex);
       for (int axis = 0; axis < 3; ++axis) {
-        std::uint8_t& axes = seen[apex_key];
-        if (axes & (1u << axis)) continue;
-        axes |= static_cast<std::uint8_t>(1u << axis);
-        std::array<std::int64_t, 3> other = code.cube;
-        other[static_cast<std::size_t>(axis)] += ((bp >> axis) & 1) ? 1 : -1;
+        // The pair across the face F through the apex perpendicular to `axis`, named by the
+        // cube below F (canonical code) and built from that name alone: its own frame, and
+        // the odd corner of F with the smaller key as p, so the candidate does not depend on
+        // which of its corner tets asked first.
+        std::array<std::int64_t, 3> lower = code.cube;
+        if (((bp >> axis) & 1) == 0) lower[static_cast<std::size_t>(axis)] -= 1;
+        lower = forest_.canonical(level, grid::TetCode{lower, 0}).cube;
+        std::array<std::int64_t, 3> upper = lower;
+        upper[static_cast<std::size_t>(axis)] += 1;
+        LatticePoint3 corner_point = lower;
+        for (auto& x : corner_point) x <<= (max_level - level);
+        std::uint64_t& examined = seen[grid::key3(corner_point)];
+        const std::uint64_t bit = std::uint64_t{1} << (3 * level + axis);
+        if (examined & bit) continue;
+        examined |= bit;
+        int face_p = -1;
+        LatticeKey3 apex_key = 0;
+        for (int b = 0; b < 8; ++b) {
+          if (((b >> axis) & 1) == 0 || ((grid::cube_parity(lower) + std::popcount(static_cast<unsigned>(b))) & 1) == 0) continue;
+          LatticePoint3 q{lower[0] + (b & 1), lower[1] + ((b >> 1) & 1), lower[2] + ((b >> 2) & 1)};
+          for (auto& x : q) x <<= (max_level - level);
+          const LatticeKey3 k = grid::key3(lattice().canonical_point(q));
+          if (face_p < 0 || k < apex_key) face_p = b, apex_key = k;
+        }
         Candidate c;
         c.axis = axis;
         c.key = apex_key;
-        if (!make_half(code.cube, level, axis, bp, c.a)) continue;
-        if (!make_half(other, level, axis, bp ^ (1 << axis), c.b)) continue;
+        if (!make_half(lower, level, axis, face_p, c.a)) continue;
+        if (!make_half(upper, level, axis, face_p ^ (1 << axis), c.b)) continue;
         c.before = std::max(c.a.before, c.b.before);
         c.after = std::max(c.a.after, c.b.after);
         if (!(c.after < c.before)) continue;
@@ -273,9 +310,10 @@ class Swapper {
     return x.axis < y.axis;
   }
 
-  void keep_cut(std::int32_t a, std::int32_t b) {
-    if (key(b) < key(a)) std::swap(a, b);
-    const std::pair<LatticeKey3, LatticeKey3> k{key(a), key(b)};
+  // Keeps the trial cut of the edge between frame points fa and fb, if one was computed.
+  void keep_cut(const LatticePoint3& fa, const LatticePoint3& fb) {
+    const radapt::EdgeFrame frame = radapt::edge_frame(lattice(), fa, fb);
+    const std::pair<LatticeKey3, LatticeKey3> k{frame.lo(), frame.hi()};
     const auto it = trial_index_.find(k);
     if (it == trial_index_.end()) return;
     if (out_.new_cut_index.try_emplace(k, static_cast<std::int32_t>(out_.new_cuts.size())).second)
@@ -302,7 +340,7 @@ class Swapper {
         out_.blocks.push_back({h->leaves[2], h->tets});
         for (std::int32_t t : h->leaves) out_.block_of[static_cast<std::size_t>(t)] = block;
         for (const auto& nt : h->tets)
-          for (const auto& e : tet::kEdges) keep_cut(nt.node[e[0]], nt.node[e[1]]);
+          for (const auto& e : tet::kEdges) keep_cut(nt.lattice[e[0]], nt.lattice[e[1]]);
       }
     }
   }

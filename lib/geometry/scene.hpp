@@ -131,14 +131,15 @@ struct SceneDesc {
 inline std::string inclusion_field(std::size_t i) { return "inclusions[" + std::to_string(i) + "]"; }
 
 // The same for inclusion k of a scene with periodic images: a listed inclusion by its field,
-// an image as "the periodic image (+x-y) of inclusions[i]".
+// an image as "the periodic image (+x-2y) of inclusions[i]".
 inline std::string inclusion_name(const SceneDesc& scene, std::size_t k) {
   const std::size_t base = scene.listed(k);
   if (base == k) return inclusion_field(k);
   std::string shift;
   for (int d = 0; d < 3; ++d) {
     const int s = scene.image_shift[k][static_cast<std::size_t>(d)];
-    for (int i = 0; i < std::abs(s); ++i) shift += std::string(s > 0 ? "+" : "-") + "xyz"[d];
+    if (s == 0) continue;  // "+x", "-2y": the shift in periods along each axis
+    shift += std::string(s > 0 ? "+" : "-") + (std::abs(s) > 1 ? std::to_string(std::abs(s)) : "") + "xyz"[d];
   }
   return "the periodic image (" + shift + ") of " + inclusion_field(base);
 }

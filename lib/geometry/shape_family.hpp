@@ -39,6 +39,13 @@ class ShapeFamily {
   virtual double boundary_measure(const Shape& s) const = 0;
   virtual std::vector<Vec3> boundary_samples(const Shape& s, double spacing) const = 0;
   virtual bool contains(const Shape& s, const Vec3& p) const = 0;
+  // Whether any of `points` is contained: contains() per point by default; a family whose
+  // queries need a built structure (STL) builds it once for all of them.
+  virtual bool contains_any(const Shape& s, const std::vector<Vec3>& points) const {
+    for (const Vec3& p : points)
+      if (contains(s, p)) return true;
+    return false;
+  }
   virtual void translate(Shape& s, const Vec3& offset) const = 0;
   // shape_boundary_samples_within (3D). Default: the boundary samples in `clip`, each an
   // equal share of the boundary measure (the cost of sampling the whole boundary).

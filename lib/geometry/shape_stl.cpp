@@ -158,6 +158,13 @@ class StlFamily final : public FamilyOf<StlSurface> {
   bool contains(const Shape& s, const Vec3& p) const override {
     return !of(s).triangles.empty() && stl::side(mesh_of(of(s)), p) >= 0;
   }
+  bool contains_any(const Shape& s, const std::vector<Vec3>& points) const override {
+    if (of(s).triangles.empty() || points.empty()) return false;
+    const stl::Mesh m = mesh_of(of(s));
+    for (const Vec3& p : points)
+      if (stl::side(m, p) >= 0) return true;
+    return false;
+  }
   void translate(Shape& s, const Vec3& o) const override {
     for (int k = 0; k < 3; ++k) of(s).translate[k] += o[k];
   }

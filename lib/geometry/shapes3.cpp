@@ -31,10 +31,8 @@ bool overlap3(const Shape& a, const Shape& b, double gap) {
     if (gap > 0) return true;
     const double size = std::max(norm(Vec3{ba.max[0] - ba.min[0], ba.max[1] - ba.min[1], ba.max[2] - ba.min[2]}),
                                  norm(Vec3{bb.max[0] - bb.min[0], bb.max[1] - bb.min[1], bb.max[2] - bb.min[2]}));
-    for (const Vec3& q : fa.boundary_samples(a, size / 64))
-      if (fb.contains(b, q)) return true;
-    for (const Vec3& q : fb.boundary_samples(b, size / 64))
-      if (fa.contains(a, q)) return true;
+    if (fb.contains_any(b, fa.boundary_samples(a, size / 64))) return true;
+    if (fa.contains_any(a, fb.boundary_samples(b, size / 64))) return true;
     return &fa == &fb && fa.edges_pierce(a, b);
   }
   // Convex bodies are apart by more than gap iff some unit d has h_a(d) + h_b(−d) < −gap.

@@ -67,6 +67,23 @@ struct Lattice {
       if (shift & (1u << d)) p[d] += period(d);
     return p;
   }
+  // A fine point reduced into [0, P) on the periodic axes: the one point a key names.
+  std::array<std::int64_t, Dim> canonical_point(std::array<std::int64_t, Dim> p) const {
+    for (int d = 0; d < Dim; ++d) p[d] = canonical(d, p[d]);
+    return p;
+  }
+  // A point moved by the period on the axes of `shift` (an image's unwrapped point).
+  std::array<std::int64_t, Dim> shifted_point(std::array<std::int64_t, Dim> p, std::uint8_t shift) const {
+    for (int d = 0; d < Dim; ++d)
+      if (shift & (1u << d)) p[d] += fine_period(d);
+    return p;
+  }
+  // A frame point moved back by the period on the axes of `shift`.
+  std::array<std::int64_t, Dim> unshifted(std::array<std::int64_t, Dim> p, std::uint8_t shift) const {
+    for (int d = 0; d < Dim; ++d)
+      if (shift & (1u << d)) p[d] -= fine_period(d);
+    return p;
+  }
   // A cell index at `level` reduced into [0, N·2^level) on a periodic axis.
   std::int64_t canonical_cell(int d, int level, std::int64_t i) const {
     if (!periodic[d]) return i;

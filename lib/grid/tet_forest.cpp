@@ -39,25 +39,43 @@ constexpr ChildTable kChildTable = make_child_table();
 }  // namespace
 
 TetForest::TetForest(const Lattice3& lattice, const CellRange<3>& range) : lattice_(lattice), range_(range) {
-  for (int d = 0; d < 3; ++d)
-    if (range.hi[d] > lattice.coarse_cells[d] || range.lo[d] < 0 || range.hi[d] <= range.lo[d])
+  for (int d = 0; d < 3; ++d) {
+    // A window along a periodic axis may reach past either face (it wraps); once it spans
+    // the period it is the whole circle.
+    if (lattice.periodic[d] && range.count(d) >= lattice.coarse_cells[d]) range_.lo[d] = 0, range_.hi[d] = lattice.coarse_cells[d];
+    if (!lattice.periodic[d] && (range.hi[d] > lattice.coarse_cells[d] || range.lo[d] < 0))
       throw MeshingError("cell range outside the domain lattice");
+    if (range.hi[d] <= range.lo[d]) throw MeshingError("cell range outside the domain lattice");
+  }
   require_key3(lattice);  // also keeps every level coordinate within 32 bits
-  const std::int64_t n = range.count(0) * range.count(1) * range.count(2);
+  const std::int64_t n = range_.count(0) * range_.count(1) * range_.count(2);
   if (5 * n > 2147483647) throw MeshingError("too many coarse cubes in one tet forest");
   root_count_ = static_cast<std::int32_t>(5 * n);
   tets_.resize(static_cast<std::size_t>(root_count_));
-  for (std::int64_t ck = range.lo[2]; ck < range.hi[2]; ++ck)
-    for (std::int64_t cj = range.lo[1]; cj < range.hi[1]; ++cj)
-      for (std::int64_t ci = range.lo[0]; ci < range.hi[0]; ++ci)
+  // Roots in window order; each holds its canonical cube.
+  for (std::int64_t ck = range_.lo[2]; ck < range_.hi[2]; ++ck)
+    for (std::int64_t cj = range_.lo[1]; cj < range_.hi[1]; ++cj)
+      for (std::int64_t ci = range_.lo[0]; ci < range_.hi[0]; ++ci)
         for (int local = 0; local < 5; ++local) {
           Tet& t = tets_[static_cast<std::size_t>(root(ci, cj, ck, local))];
-          t.cube = {static_cast<std::int32_t>(ci), static_cast<std::int32_t>(cj), static_cast<std::int32_t>(ck)};
+          t.cube = {static_cast<std::int32_t>(lattice_.canonical_cell(0, 0, ci)),
+                    static_cast<std::int32_t>(lattice_.canonical_cell(1, 0, cj)),
+                    static_cast<std::int32_t>(lattice_.canonical_cell(2, 0, ck))};
           t.local = static_cast<std::uint8_t>(local);
         }
 }
 
+std::int64_t TetForest::window_position(int d, std::int64_t c) const {
+  if (!lattice_.periodic[d]) return c;
+  const std::int64_t n = lattice_.coarse_cells[d];
+  const std::int64_t offset = ((c - range_.lo[d]) % n + n) % n;
+  return range_.lo[d] + offset;
+}
+
 std::int32_t TetForest::root(std::int64_t ci, std::int64_t cj, std::int64_t ck, int local) const {
+  ci = window_position(0, ci);
+  cj = window_position(1, cj);
+  ck = window_position(2, ck);
   if (ci < range_.lo[0] || ci >= range_.hi[0] || cj < range_.lo[1] || cj >= range_.hi[1] || ck < range_.lo[2] ||
       ck >= range_.hi[2])
     return -1;
@@ -80,7 +98,7 @@ std::array<LatticeKey3, 4> TetForest::vertex_keys(std::int32_t t) const {
 }
 
 std::int32_t TetForest::find(int level, const TetCode& target) const {
-  const LatticePoint3 c4 = centroid4(target);  // level coordinates × 4
+  const LatticePoint3 c4 = centroid4(canonical(level, target));  // level coordinates × 4
   for (int d = 0; d < 3; ++d)
     if (c4[d] < 0) return -1;
   const TetCode top = locate(c4, 2 + level);
@@ -90,12 +108,12 @@ std::int32_t TetForest::find(int level, const TetCode& target) const {
 }
 
 std::int32_t TetForest::find_near(std::int32_t start, int level, const TetCode& target) const {
-  const LatticePoint3 c4 = centroid4(target);
+  const LatticePoint3 c4 = centroid4(canonical(level, target));
   for (std::int32_t t = start; t >= 0; t = tets_[static_cast<std::size_t>(t)].parent) {
     const Tet& x = tets_[static_cast<std::size_t>(t)];
     if (x.level <= level && locate(c4, 2 + level - x.level) == code(t)) return descend(t, level, c4);
   }
-  return find(level, target);
+  return find(level, canonical(level, target));
 }
 
 std::int32_t TetForest::descend(std::int32_t t, int level, const LatticePoint3& c4) const {
@@ -163,14 +181,21 @@ void TetForest::leaves_at_midpoint(const LatticePoint3& a, const LatticePoint3& 
 
 void TetForest::leaves_with_vertex(std::int32_t t, const LatticePoint3& p, std::vector<std::int32_t>& out) const {
   // p as a point of t's refinement templates: a vertex or an edge midpoint.
+  // Compared modulo the period: t holds its canonical frame, p may be another image.
+  const auto same = [&](const LatticePoint3& a, const LatticePoint3& b) {
+    for (int d = 0; d < 3; ++d)
+      if (lattice_.canonical(d, a[d]) != lattice_.canonical(d, b[d])) return false;
+    return true;
+  };
   const auto v = fine_vertices(t);
   int point = -1;
   for (int i = 0; i < 4 && point < 0; ++i)
-    if (v[i] == p) point = i;
+    if (same(v[i], p)) point = i;
   for (int e = 0; e < 6 && point < 0; ++e) {
     const auto& a = v[tet::kEdges[e][0]];
     const auto& b = v[tet::kEdges[e][1]];
-    if (a[0] + b[0] == 2 * p[0] && a[1] + b[1] == 2 * p[1] && a[2] + b[2] == 2 * p[2]) point = tet::midpoint(e);
+    // t is not a leaf, so its vertices have even coordinates and the midpoint is a point.
+    if (same({(a[0] + b[0]) / 2, (a[1] + b[1]) / 2, (a[2] + b[2]) / 2}, p)) point = tet::midpoint(e);
   }
   const std::int32_t first = tet(t).first_child;
   const bool corner = kind(t) == tet::Kind::corner;

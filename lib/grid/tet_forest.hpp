@@ -26,7 +26,9 @@ class TetForest {
   };
 
   // Throws MeshingError when the range is outside the domain or the lattice does not fit
-  // the 64-bit key (require_key3).
+  // the 64-bit key (require_key3). On a periodic axis the range may reach past either face
+  // (a window that wraps; the whole circle once it spans the period): tets hold canonical
+  // codes (cube coordinates in [0, N·2^level)), and every look-up takes any image.
   TetForest(const Lattice3& lattice, const CellRange<3>& range);
 
   const Lattice3& lattice() const { return lattice_; }
@@ -45,7 +47,17 @@ class TetForest {
   tet::Kind kind(std::int32_t t) const { return kind_of_local(tet(t).local); }
   int child_count(std::int32_t t) const { return tet::child_count(kind(t)); }
   std::int32_t root_count() const { return root_count_; }
-  // Root `local` (0..4) of global coarse cube (ci, cj, ck), or -1 outside the range.
+  // Where the window holds coarse index c along d: c itself, or on a periodic axis the one
+  // image of c in [lo, lo + N).
+  std::int64_t window_position(int d, std::int64_t c) const;
+  // The code of the same honeycomb tet with its cube reduced into [0, N·2^level) on the
+  // periodic axes (parity is kept: N is even on a periodic axis in 3D).
+  TetCode canonical(int level, TetCode code) const {
+    for (int d = 0; d < 3; ++d) code.cube[d] = lattice_.canonical_cell(d, level, code.cube[d]);
+    return code;
+  }
+  // Root `local` (0..4) of global coarse cube (ci, cj, ck) (any image on a periodic axis),
+  // or -1 outside the range.
   std::int32_t root(std::int64_t ci, std::int64_t cj, std::int64_t ck, int local) const;
   TetCode code(std::int32_t t) const {
     const Tet& x = tet(t);
@@ -93,8 +105,8 @@ class TetForest {
   // The deepest tet with level ≤ `level` below t on the way to the level-`level` tet whose
   // centroid (×4, level coordinates) is c4; t must contain it.
   std::int32_t descend(std::int32_t t, int level, const LatticePoint3& c4) const;
-  // Appends the leaves below non-leaf t that have the fine point p as a vertex; p must be a
-  // vertex or an edge midpoint of t.
+  // Appends the leaves below non-leaf t that have the fine point p (any periodic image) as a
+  // vertex; p must be a vertex or an edge midpoint of t.
   void leaves_with_vertex(std::int32_t t, const LatticePoint3& p, std::vector<std::int32_t>& out) const;
 };
 

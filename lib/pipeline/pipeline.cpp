@@ -29,10 +29,16 @@ grid::Lattice<Dim> make_lattice(const geometry::SceneDesc& scene, const Options&
       throw InputError(scene.source, "mesh.h",
                        std::string("a periodic axis needs at least 2 cells of h; ") + "xyz"[d] + " has 1");
   }
+  // The five-tetrahedron honeycomb alternates with the parity of the cube (tet_lattice.hpp):
+  // it closes on a torus only with an even cell count. And an edge (at most one cell long
+  // per axis) must be told from its image across the period by its ends' canonical keys,
+  // which takes more than 2 cells: so at least 4.
   if constexpr (Dim == 3)
-    if (lattice.any_periodic())
-      throw InputError(scene.source, "domain.periodic",
-                       "periodic meshes are made in 2D only so far; a 3D scene must have periodic: false");
+    for (int d = 0; d < Dim; ++d)
+      if (lattice.periodic[d] && (lattice.coarse_cells[d] % 2 != 0 || lattice.coarse_cells[d] < 4))
+        throw InputError(scene.source, "mesh.h",
+                         std::string("periodic axis ") + "xyz"[d] + " has " + std::to_string(lattice.coarse_cells[d]) +
+                             " cells of h; a periodic 3D mesh needs an even number, at least 4");
   if constexpr (Dim == 3) grid::require_key3(lattice);
   return lattice;
 }

@@ -43,6 +43,8 @@ struct Candidate {
 
 // Crossings of one phase-changing edge nearest each end, for snap candidates.
 struct EdgeEnds {
+  LatticePoint3 qa{}, qb{};  // lo and hi in the edge's frame (radapt3.hpp, EdgeFrame)
+  Vec3 pa{}, pb{};           // their positions there
   bool axis = true;
   double length = 0;
   bool any = false;
@@ -84,6 +86,7 @@ class Snapper {
   // an upper bound of the collapse's deviation tighter than the oracle's for STL unions.
   std::unordered_map<std::uint64_t, double> reach_;
   std::vector<geometry::Crossing> crossings_;
+  std::vector<std::int32_t> plane_candidates_;
 
   std::size_t node_count() const { return nodes_.key.size(); }
 
@@ -117,10 +120,18 @@ class Snapper {
       }
       const auto candidates = g_.candidates_of_tet(t);
       if (g_.is_cut(t)) {
-        for (std::int32_t id : ids)
-          if (nodes_.mask[static_cast<std::size_t>(id)] == 0)
-            nodes_.mask[static_cast<std::size_t>(id)] =
-                oracle_.closure_phases(nodes_.position[static_cast<std::size_t>(id)], candidates);
+        for (std::int32_t id : ids) {
+          if (nodes_.mask[static_cast<std::size_t>(id)] != 0) continue;
+          const Vec3& p = nodes_.position[static_cast<std::size_t>(id)];
+          // A node on a periodic plane is a vertex of leaves on both sides of the period,
+          // whose candidate lists hold the geometry in different frames: ask for its own.
+          if (on_periodic_plane(point_[static_cast<std::size_t>(id)])) {
+            oracle_.candidates(Box3{p, p}, plane_candidates_);
+            nodes_.mask[static_cast<std::size_t>(id)] = oracle_.closure_phases(p, plane_candidates_);
+          } else {
+            nodes_.mask[static_cast<std::size_t>(id)] = oracle_.closure_phases(p, candidates);
+          }
+        }
       } else {
         // No boundary meets the leaf: its vertices lie strictly inside its phase, so one
         // already classified (by a neighbour) tells it without asking the oracle.
@@ -131,8 +142,10 @@ class Snapper {
           bit = known;
         } else if (!candidates.empty()) {
           Vec3 centre{0, 0, 0};
-          for (std::int32_t id : ids)
-            for (int d = 0; d < 3; ++d) centre[d] += 0.25 * nodes_.position[static_cast<std::size_t>(id)][d];
+          for (int i = 0; i < 4; ++i) {
+            const Vec3 p = frame_position(ids[static_cast<std::size_t>(i)], v[i]);
+            for (int d = 0; d < 3; ++d) centre[d] += 0.25 * p[d];
+          }
           bit = PhaseMask{1} << oracle_.phase_at(centre, candidates);
         }
         for (std::int32_t id : ids)
@@ -142,9 +155,22 @@ class Snapper {
     nodes_.state.assign(node_count(), NodeState::stayed);
   }
 
-  std::int32_t add_node(const LatticePoint3& p) {
+  // On a periodic plane: a canonical coordinate 0 on a periodic axis.
+  bool on_periodic_plane(const LatticePoint3& canonical) const {
+    for (int d = 0; d < 3; ++d)
+      if (lattice_.periodic[d] && canonical[d] == 0) return true;
+    return false;
+  }
+  // The position of node `id` seen at frame point `frame` ∈ [0, P] (lattice.hpp).
+  Vec3 frame_position(std::int32_t id, const LatticePoint3& frame) const {
+    return lattice_.shifted(nodes_.position[static_cast<std::size_t>(id)], lattice_.image_shift(frame));
+  }
+
+  // Registers the node at frame point `frame` under its canonical point.
+  std::int32_t add_node(const LatticePoint3& frame) {
     bool inserted = false;
     const auto next = static_cast<std::int32_t>(nodes_.key.size());
+    const LatticePoint3 p = lattice_.canonical_point(frame);
     const LatticeKey3 k = grid::key3(p);
     const std::int32_t id = nodes_.registry.insert(k, next, inserted);
     if (inserted) {
@@ -166,16 +192,17 @@ class Snapper {
       tet_done(1, t);
       if (!forest_.is_leaf(t) || !g_.is_cut(t)) continue;
       const auto& ids = nodes_.tet_nodes[static_cast<std::size_t>(t)];
+      const auto v = forest_.fine_vertices(t);
       std::array<std::int32_t, 6> slots{-1, -1, -1, -1, -1, -1};
       bool any = false;
       for (int e = 0; e < 6; ++e) {
         std::int32_t a = ids[tet::kEdges[e][0]], b = ids[tet::kEdges[e][1]];
         if (nodes_.mask[static_cast<std::size_t>(a)] & nodes_.mask[static_cast<std::size_t>(b)]) continue;
-        if (nodes_.key[static_cast<std::size_t>(b)] < nodes_.key[static_cast<std::size_t>(a)]) std::swap(a, b);
-        const std::pair<LatticeKey3, LatticeKey3> k{nodes_.key[static_cast<std::size_t>(a)],
-                                                     nodes_.key[static_cast<std::size_t>(b)]};
+        EdgeFrame frame = edge_frame(lattice_, v[tet::kEdges[e][0]], v[tet::kEdges[e][1]]);
+        if (grid::key3(frame.b) < grid::key3(frame.a)) std::swap(a, b), std::swap(frame.a, frame.b);
+        const std::pair<LatticeKey3, LatticeKey3> k{grid::key3(frame.a), grid::key3(frame.b)};
         auto [it, inserted] = index.try_emplace(k, static_cast<std::int32_t>(nodes_.edges.size()));
-        if (inserted) add_edge(a, b, t);
+        if (inserted) add_edge(a, b, frame, t);
         slots[static_cast<std::size_t>(e)] = it->second;
         any = true;
       }
@@ -185,16 +212,25 @@ class Snapper {
     }
   }
 
-  void add_edge(std::int32_t lo, std::int32_t hi, std::int32_t leaf) {
-    const Vec3& pa = nodes_.position[static_cast<std::size_t>(lo)];
-    const Vec3& pb = nodes_.position[static_cast<std::size_t>(hi)];
-    const LatticePoint3& qa = point_[static_cast<std::size_t>(lo)];
-    const LatticePoint3& qb = point_[static_cast<std::size_t>(hi)];
-    oracle_.crossings(pa, pb, g_.candidates_of_tet(leaf), crossings_);
-    EdgeCut cut;
-    cut.lo = nodes_.key[static_cast<std::size_t>(lo)];
-    cut.hi = nodes_.key[static_cast<std::size_t>(hi)];
+  // The crossings of the edge from node `lo` to node `hi`, in the edge's frame (its ends
+  // frame.a and frame.b, lo's key the smaller there).
+  void add_edge(std::int32_t lo, std::int32_t hi, const EdgeFrame& frame, std::int32_t leaf) {
     EdgeEnds ends;
+    ends.qa = frame.a, ends.qb = frame.b;
+    ends.pa = frame_position(lo, frame.a), ends.pb = frame_position(hi, frame.b);
+    const Vec3& pa = ends.pa;
+    const Vec3& pb = ends.pb;
+    const LatticePoint3& qa = frame.a;
+    const LatticePoint3& qb = frame.b;
+    if (frame.on_periodic_plane(lattice_)) {  // seen from two frames: its own candidates
+      oracle_.candidates(segment_box(pa, pb), plane_candidates_);
+      oracle_.crossings(pa, pb, plane_candidates_, crossings_);
+    } else {
+      oracle_.crossings(pa, pb, g_.candidates_of_tet(leaf), crossings_);
+    }
+    EdgeCut cut;
+    cut.lo = grid::key3(frame.a);
+    cut.hi = grid::key3(frame.b);
     int differing = 0;
     for (int d = 0; d < 3; ++d) differing += qa[d] != qb[d] ? 1 : 0;
     ends.axis = differing == 1;
@@ -258,7 +294,7 @@ class Snapper {
     for (std::size_t e = 0; e < nodes_.edges.size(); ++e) {
       const EdgeCut& cut = nodes_.edges[e];
       const EdgeEnds& ends = ends_[e];
-      const std::int32_t lo = nodes_.id(cut.lo), hi = nodes_.id(cut.hi);
+      const std::int32_t lo = nodes_.id(canonical_key(lattice_, cut.lo)), hi = nodes_.id(canonical_key(lattice_, cut.hi));
       for (int side = 0; side < 2; ++side) {
         const std::int32_t v = side == 0 ? lo : hi, w = side == 0 ? hi : lo;
         const auto uv = static_cast<std::size_t>(v), uw = static_cast<std::size_t>(w);
@@ -278,13 +314,15 @@ class Snapper {
         nearest[uv] = std::min(nearest[uv], fraction);
         if (single_phase(nodes_.mask[uv]) < 0) continue;  // already on an interface
         if (fraction > (ends.axis ? options_.alpha : options_.alpha_diagonal)) continue;
-        if (!slides_within_domain(point_[uv], point_[uw])) continue;
+        // In the edge's frame (on a periodic plane a node slides within it, so its frame is
+        // then its canonical one and the snapped position needs no shift).
+        if (!slides_within_domain(side == 0 ? ends.qa : ends.qb, side == 0 ? ends.qb : ends.qa)) continue;
         Candidate c;
         c.node = v;
         c.fraction = fraction;
         c.distance = fraction * ends.length;
         c.other = nodes_.key[uw];
-        const Vec3 &pa = nodes_.position[static_cast<std::size_t>(lo)], &pb = nodes_.position[static_cast<std::size_t>(hi)];
+        const Vec3 &pa = ends.pa, &pb = ends.pb;
         const double t = side == 0 ? ends.t_front : ends.t_back;
         for (int d = 0; d < 3; ++d) c.position[d] = pa[d] + t * (pb[d] - pa[d]);
         c.mask = side == 0 ? ends.mask_front : ends.mask_back;
@@ -475,7 +513,7 @@ class Snapper {
       const std::int32_t o = chosen[k];
       const auto v = static_cast<std::size_t>(ids[k]);
       const bool snap = o >= 0 && option_[static_cast<std::size_t>(o)].kind == OptionKind::snap;
-      leaf_.p[k] = o < 0 ? nodes_.position[v] : option_[static_cast<std::size_t>(o)].position;
+      leaf_.p[k] = lattice_.shifted(o < 0 ? nodes_.position[v] : option_[static_cast<std::size_t>(o)].position, leaf_.shift[k]);
       mask[k] = o < 0 ? nodes_.mask[v] : option_[static_cast<std::size_t>(o)].mask;
       where[k] = snap ? static_cast<std::uint32_t>(1 + o - option_begin_[v]) : 0;
     }
@@ -528,7 +566,8 @@ class Snapper {
   // The leaf being guarded: its lattice points, point identities and cut points (points
   // 0-3 are set per combination), and its splits by sign pattern.
   struct LeafData {
-    std::array<LatticePoint3, 4> lattice{};
+    std::array<LatticePoint3, 4> lattice{};  // frame points
+    std::array<std::uint8_t, 4> shift{};     // each vertex's image in the leaf's frame
     std::array<grid::stencil3::PointId, 10> id{};
     std::array<Vec3, 10> p{};
     std::array<bool, 6> has_cut{};
@@ -547,9 +586,10 @@ class Snapper {
   void memo_leaf(std::int32_t t) {
     ++memo_generation_;
     const auto& ids = nodes_.tet_nodes[static_cast<std::size_t>(t)];
+    leaf_.lattice = forest_.fine_vertices(t);
     for (int i = 0; i < 4; ++i) {
       const auto v = static_cast<std::size_t>(ids[static_cast<std::size_t>(i)]);
-      leaf_.lattice[static_cast<std::size_t>(i)] = point_[v];
+      leaf_.shift[static_cast<std::size_t>(i)] = lattice_.image_shift(leaf_.lattice[static_cast<std::size_t>(i)]);
       leaf_.id[static_cast<std::size_t>(i)] = {nodes_.key[v], nodes_.key[v]};
     }
     const auto* edges = nodes_.edges_of(t);
@@ -558,7 +598,8 @@ class Snapper {
       leaf_.has_cut[static_cast<std::size_t>(e)] = ei >= 0;
       if (ei < 0) continue;
       const EdgeCut& cut = nodes_.edges[static_cast<std::size_t>(ei)];
-      leaf_.p[static_cast<std::size_t>(tet::midpoint(e))] = cut.point;
+      const std::uint8_t shift = leaf_.shift[tet::kEdges[e][0]] & leaf_.shift[tet::kEdges[e][1]];
+      leaf_.p[static_cast<std::size_t>(tet::midpoint(e))] = lattice_.shifted(cut.point, shift);
       leaf_.id[static_cast<std::size_t>(tet::midpoint(e))] = {cut.lo, cut.hi};
     }
   }

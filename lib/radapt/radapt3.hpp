@@ -15,6 +15,7 @@
 // checked, so no emitted tetrahedron exceeds `bound`. The last options of all vertices (all
 // staying, collapsed where they touch a phase change) keep the leaf whole and undeformed, so
 // every bad combination holds an option that can be refused.
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <unordered_map>
@@ -49,7 +50,8 @@ enum class NodeState : std::uint8_t { stayed = 0, snapped = 1, collapsed = 2 };
 
 // A phase-changing edge of a cut leaf (its ends' closure masks are disjoint) and the point
 // where the interface between its ends' phases crosses it, computed on the original segment
-// oriented from the smaller key (the same doubles on every partition).
+// oriented from the smaller key (the same doubles on every partition). On a periodic
+// lattice the keys and the point are those of the edge's frame (EdgeFrame).
 struct EdgeCut {
   grid::LatticeKey3 lo = 0, hi = 0;
   Vec3 point{};
@@ -66,6 +68,42 @@ inline const geometry::Crossing* crossing_between(const std::vector<geometry::Cr
   return nullptr;
 }
 
+// A periodic lattice (docs/periodic-design.md §3.2): the canonical key of a frame key (one
+// node per point of the torus), and the key pair and frame of an edge seen from a leaf. A
+// leaf's frame points lie in [0, P] per axis; an edge lying in a periodic plane is seen at
+// 0 from one side and at P from the other, so its own frame moves both ends back to 0 (its
+// `shift`: the axes where both ends are at P). One edge then has one key pair and one frame
+// (its cut point is computed once, there), and a leaf sees it at + the period on `shift`.
+inline grid::LatticeKey3 canonical_key(const grid::Lattice3& lattice, grid::LatticeKey3 k) {
+  if (!lattice.any_periodic()) return k;
+  return grid::key3(lattice.canonical_point(grid::key3_point(k)));
+}
+struct EdgeFrame {
+  grid::LatticePoint3 a{}, b{};  // the ends in the edge's frame
+  std::uint8_t shift = 0;        // the leaf's frame is the edge's + the period on these axes
+  grid::LatticeKey3 lo() const { return std::min(grid::key3(a), grid::key3(b)); }
+  grid::LatticeKey3 hi() const { return std::max(grid::key3(a), grid::key3(b)); }
+  // On a periodic plane (both ends at the canonical 0 of a periodic axis): seen from two frames.
+  bool on_periodic_plane(const grid::Lattice3& lattice) const {
+    for (int d = 0; d < 3; ++d)
+      if (lattice.periodic[d] && a[d] == 0 && b[d] == 0) return true;
+    return false;
+  }
+};
+inline EdgeFrame edge_frame(const grid::Lattice3& lattice, const grid::LatticePoint3& a, const grid::LatticePoint3& b) {
+  EdgeFrame f;
+  f.shift = static_cast<std::uint8_t>(lattice.image_shift(a) & lattice.image_shift(b));
+  f.a = lattice.unshifted(a, f.shift);
+  f.b = lattice.unshifted(b, f.shift);
+  return f;
+}
+// The closed box of a segment: the region whose inclusions a segment's crossings need.
+inline Box3 segment_box(const Vec3& a, const Vec3& b) {
+  Box3 box{a, a};
+  for (int d = 0; d < 3; ++d) box.min[d] = std::min(a[d], b[d]), box.max[d] = std::max(a[d], b[d]);
+  return box;
+}
+
 struct KeyPairHash {
   std::size_t operator()(const std::pair<grid::LatticeKey3, grid::LatticeKey3>& p) const {
     std::uint64_t h = p.first * 0x9e3779b97f4a7c15ULL;
@@ -79,7 +117,7 @@ using EdgeIndex = std::unordered_map<std::pair<grid::LatticeKey3, grid::LatticeK
 // The nodes of the refined forest: lattice keys, final positions and closure masks (one
 // bit inside a phase, two or more on an interface, or for a collapsed node).
 struct Nodes3 {
-  std::vector<grid::LatticeKey3> key;
+  std::vector<grid::LatticeKey3> key;  // canonical keys (lattice.hpp)
   std::vector<Vec3> position;
   std::vector<PhaseMask> mask;
   std::vector<NodeState> state;
@@ -108,7 +146,8 @@ struct Nodes3 {
   double max_collapse_deviation = 0;     // largest distance of a collapsed node (or cut point) from a phase it serves
 
   std::int32_t id(grid::LatticeKey3 k) const { return registry.find(k); }
-  // The phase-changing edge between two lattice keys (either order), or -1.
+  // The phase-changing edge between two lattice keys (either order; an edge's frame keys on
+  // a periodic lattice), or -1.
   std::int32_t edge(grid::LatticeKey3 a, grid::LatticeKey3 b) const {
     const auto it = edge_index.find(a < b ? std::pair{a, b} : std::pair{b, a});
     return it == edge_index.end() ? -1 : it->second;

@@ -143,7 +143,7 @@ class Refiner {
     finest_near_.assign(static_cast<std::size_t>(roots / 5), 0);
     for (std::int32_t r = 0; r < roots; ++r) {
       if (!g_.is_cut(r)) continue;
-      for (LatticeKey3 k : g_.forest.vertex_keys(r)) nodes_.insert(k, 1);
+      for (const LatticePoint3& p : g_.forest.fine_vertices(r)) nodes_.insert(key_of(p), 1);
       // First sweep: only the cut roots can fire (R1, R2); B and R4 need nodes finer than
       // level 0, and there are none yet.
       queue_.push_back(r);
@@ -203,6 +203,10 @@ class Refiner {
   // closure of a tet in the cube.
   std::vector<std::uint8_t> finest_, finest_near_;
 
+  // The node table's key of a frame point: its canonical point's (one node per point of
+  // the torus on periodic axes).
+  LatticeKey3 key_of(const LatticePoint3& p) const { return grid::key3(g_.forest.lattice().canonical_point(p)); }
+
   // Tets of `level` now exist in the coarse cube of tet t.
   void note_level(std::int32_t t, int level) {
     const auto [ci, cj, ck] = g_.forest.coarse_cell(t);
@@ -246,13 +250,13 @@ class Refiner {
     // B: no finer node in the closure than the edge midpoints.
     if (level + 2 <= finest)
       for (const auto& w : kQuarterProbes)
-        if (nodes_.contains(grid::key3(weighted(v, w, 4)))) return true;
+        if (nodes_.contains(key_of(weighted(v, w, 4)))) return true;
     // R4: a leaf around a node that may move carries no hanging midpoint.
     bool near_cut = g_.is_cut(t);
-    for (int i = 0; i < 4 && !near_cut; ++i) near_cut = nodes_.cut_leaves(grid::key3(v[i])) > 0;
+    for (int i = 0; i < 4 && !near_cut; ++i) near_cut = nodes_.cut_leaves(key_of(v[i])) > 0;
     if (near_cut)
       for (const auto& w : kMidpointWeights)
-        if (nodes_.contains(grid::key3(weighted(v, w, 2)))) return true;
+        if (nodes_.contains(key_of(weighted(v, w, 2)))) return true;
     return false;
   }
 
@@ -319,11 +323,11 @@ class Refiner {
 
     // New nodes (the midpoints and the centre) and the counts of cut leaves.
     for (int i = 0; i < 4; ++i)
-      if (cut_delta[i] != 0) nodes_.insert(grid::key3(points[i]), cut_delta[i]);
-    if (!corner) nodes_.insert(grid::key3(points[tet::kCentroid]), cut_delta[tet::kCentroid]);
+      if (cut_delta[i] != 0) nodes_.insert(key_of(points[i]), cut_delta[i]);
+    if (!corner) nodes_.insert(key_of(points[tet::kCentroid]), cut_delta[tet::kCentroid]);
     for (int e = 0; e < 6; ++e) {
       const int p = tet::midpoint(e);
-      const std::int32_t before = nodes_.insert(grid::key3(points[p]), cut_delta[p]);
+      const std::int32_t before = nodes_.insert(key_of(points[p]), cut_delta[p]);
       // A midpoint that became a node, or a node that may move, changes the rules of the
       // leaves whose closure holds it. (The centre is only in the children's closures, and
       // t's vertices were nodes of a cut leaf already when a child is cut.)
@@ -350,7 +354,7 @@ RefinedGrid3 refine3(const geometry::Oracle3& oracle, const grid::Lattice3& latt
   if (!levels.empty() && static_cast<int>(levels.size()) != oracle.inclusion_count())
     throw std::invalid_argument("refine3: one level per inclusion expected");
   RefinedGrid3 g{{}, grid::TetForest(lattice, range), {}, 0, 0};
-  const std::int64_t cubes = range.count(0) * range.count(1) * range.count(2);
+  const std::int64_t cubes = g.forest.range().count(0) * g.forest.range().count(1) * g.forest.range().count(2);
   g.cube_candidates.begin.assign(static_cast<std::size_t>(cubes) + 1, 0);
   // Candidates per coarse cube: one AABB-tree query per block of cubes, then the same
   // closed-box test per cube (the tree's), so the lists are those of one query per cube.
@@ -363,30 +367,48 @@ RefinedGrid3 refine3(const geometry::Oracle3& oracle, const grid::Lattice3& latt
     }
     return b;
   };
-  // Blocks of one slab of kCandidateBlock cube layers at a time, then its cubes in order.
-  const std::int64_t blocks_x = (range.count(0) + kCandidateBlock - 1) / kCandidateBlock;
-  const std::int64_t blocks_y = (range.count(1) + kCandidateBlock - 1) / kCandidateBlock;
+  // Blocks of up to kCandidateBlock cubes per side, one slab of cube layers at a time, then
+  // the slab's cubes in order. A block never straddles a periodic face: its cubes are
+  // contiguous in canonical indices, so its box is the canonical cubes' (where their
+  // geometry, images included, lies).
+  const grid::CellRange<3>& window = g.forest.range();
+  std::array<std::vector<std::int64_t>, 3> block_of;  // per axis: window offset → block
+  std::array<std::vector<std::int64_t>, 3> block_start;  // per axis: block → first window position
+  for (int d = 0; d < 3; ++d) {
+    for (std::int64_t b = window.lo[d], e = 0; b < window.hi[d]; b = e) {
+      e = std::min(window.hi[d], b + kCandidateBlock);
+      if (lattice.periodic[d]) e = std::min(e, b + lattice.coarse_cells[d] - lattice.canonical_cell(d, 0, b));
+      block_start[d].push_back(b);
+      block_of[d].insert(block_of[d].end(), static_cast<std::size_t>(e - b), static_cast<std::int64_t>(block_start[d].size() - 1));
+    }
+    block_start[d].push_back(window.hi[d]);
+  }
+  const auto canonical_cube_box = [&](std::int64_t ci, std::int64_t cj, std::int64_t ck) {
+    return cube_box(lattice.canonical_cell(0, 0, ci), lattice.canonical_cell(1, 0, cj), lattice.canonical_cell(2, 0, ck));
+  };
+  const auto blocks_x = static_cast<std::int64_t>(block_start[0].size() - 1);
+  const auto blocks_y = static_cast<std::int64_t>(block_start[1].size() - 1);
   std::vector<std::vector<std::int32_t>> block_candidates(static_cast<std::size_t>(blocks_x * blocks_y));
-  for (std::int64_t bk = range.lo[2]; bk < range.hi[2]; bk += kCandidateBlock) {
-    const std::int64_t ek = std::min(range.hi[2], bk + kCandidateBlock);
+  for (std::size_t z = 0; z + 1 < block_start[2].size(); ++z) {
+    const std::int64_t bk = block_start[2][z], ek = block_start[2][z + 1];
     for (std::int64_t y = 0; y < blocks_y; ++y)
       for (std::int64_t x = 0; x < blocks_x; ++x) {
-        const std::int64_t bi = range.lo[0] + x * kCandidateBlock, bj = range.lo[1] + y * kCandidateBlock;
-        const std::int64_t ei = std::min(range.hi[0], bi + kCandidateBlock);
-        const std::int64_t ej = std::min(range.hi[1], bj + kCandidateBlock);
-        Box3 block = cube_box(bi, bj, bk);
-        block.max = cube_box(ei - 1, ej - 1, ek - 1).max;
+        const std::int64_t bi = block_start[0][static_cast<std::size_t>(x)], ei = block_start[0][static_cast<std::size_t>(x) + 1];
+        const std::int64_t bj = block_start[1][static_cast<std::size_t>(y)], ej = block_start[1][static_cast<std::size_t>(y) + 1];
+        Box3 block = canonical_cube_box(bi, bj, bk);
+        block.max = canonical_cube_box(ei - 1, ej - 1, ek - 1).max;
         oracle.candidates(block, block_candidates[static_cast<std::size_t>(y * blocks_x + x)]);
       }
     for (std::int64_t ck = bk; ck < ek; ++ck)
-      for (std::int64_t cj = range.lo[1]; cj < range.hi[1]; ++cj)
-        for (std::int64_t ci = range.lo[0]; ci < range.hi[0]; ++ci) {
+      for (std::int64_t cj = window.lo[1]; cj < window.hi[1]; ++cj)
+        for (std::int64_t ci = window.lo[0]; ci < window.hi[0]; ++ci) {
           g.cube_candidates.begin[static_cast<std::size_t>(g.cube_index(ci, cj, ck))] =
               static_cast<std::int32_t>(g.cube_candidates.list.size());
           const auto& found = block_candidates[static_cast<std::size_t>(
-              (cj - range.lo[1]) / kCandidateBlock * blocks_x + (ci - range.lo[0]) / kCandidateBlock)];
+              block_of[1][static_cast<std::size_t>(cj - window.lo[1])] * blocks_x +
+              block_of[0][static_cast<std::size_t>(ci - window.lo[0])])];
           if (found.empty()) continue;
-          const Box3 cube = cube_box(ci, cj, ck);
+          const Box3 cube = canonical_cube_box(ci, cj, ck);
           for (std::int32_t k : found)
             if (boxes_overlap(cube, oracle.bounding_box(k))) g.cube_candidates.list.push_back(k);
         }

@@ -43,9 +43,11 @@ struct RefinedGrid3 : TouchLists {
   std::int64_t refinements = 0;
   int sweeps = 0;  // synchronous sweeps, the last one marking nothing
 
-  // Index of the coarse cube (global coarse indices) in the range, or -1 outside.
+  // Index of the coarse cube (global coarse indices, any image on a periodic axis) in the
+  // range, or -1 outside.
   std::int64_t cube_index(std::int64_t ci, std::int64_t cj, std::int64_t ck) const {
     const auto& r = forest.range();
+    ci = forest.window_position(0, ci), cj = forest.window_position(1, cj), ck = forest.window_position(2, ck);
     if (ci < r.lo[0] || ci >= r.hi[0] || cj < r.lo[1] || cj >= r.hi[1] || ck < r.lo[2] || ck >= r.hi[2]) return -1;
     return ((ck - r.lo[2]) * r.count(1) + (cj - r.lo[1])) * r.count(0) + (ci - r.lo[0]);
   }

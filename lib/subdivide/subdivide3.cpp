@@ -6,6 +6,7 @@
 #include <utility>
 
 #include "core/check.hpp"
+#include "grid/key_map.hpp"
 #include "grid/cut_stencil3.hpp"
 #include "mesh/metrics.hpp"
 #include "subdivide/templates3.hpp"
@@ -46,6 +47,31 @@ class Subdivider3 {
   std::vector<std::int32_t> edge_point_;  // output node of each phase-changing edge, -1 until used
   std::vector<std::int32_t> swap_point_;  // output node of each new edge cut of a swap, -1 until used
   std::vector<std::int32_t> candidates_;
+  grid::KeyMap images_{16};  // (output point, shift) → its periodic image, made once
+
+  const grid::Lattice3& lattice() const { return forest_.lattice(); }
+  // The output point of point `id` (a lattice node, or a cut node in its edge's frame) seen
+  // as its image `shift` (lattice.hpp): the point itself, or a point made once at its
+  // position plus the periods, whose identity is the image's unwrapped keys, so that
+  // partitions merge it like any node. Closure Steiner points are interior: never shifted.
+  std::int32_t output_id(std::int32_t id, std::uint8_t shift) {
+    if (shift == 0) return id;
+    const std::uint64_t image_key = (static_cast<std::uint64_t>(id) << 3) | shift;
+    if (const std::int32_t known = images_.find(image_key); known >= 0) return known;
+    const auto n = static_cast<std::int32_t>(nodes_.key.size());
+    std::array<LatticeKey3, 2> identity{};
+    if (id < n) {
+      identity = {nodes_.key[static_cast<std::size_t>(id)], nodes_.key[static_cast<std::size_t>(id)]};
+    } else {
+      identity = out_.extra_identity[static_cast<std::size_t>(id - n)];
+      CISAMR_CHECK(identity[0] != Tets3::kInteriorPoint, "subdivide3: an interior point seen across the period");
+    }
+    for (auto& k : identity) k = grid::key3(lattice().shifted_point(grid::key3_point(k), shift));
+    const std::int32_t out = add_point(lattice().shifted(position(id), shift), mask_of(id), identity[0], identity[1]);
+    bool inserted = false;
+    images_.insert(image_key, out, inserted);
+    return out;
+  }
 
   const Vec3& position(std::int32_t id) const {
     const auto n = static_cast<std::int32_t>(nodes_.key.size());
@@ -123,20 +149,30 @@ class Subdivider3 {
     const auto v = forest_.fine_vertices(t);
     const int level = forest_.tet(t).level;
     // Hanging midpoints: edge midpoints that are nodes (vertices of finer leaves).
+    // Points 0-9 by their frame points (`frame`) and canonical keys (`keys`, for node
+    // look-ups and the key rules, so both sides of a periodic plane decide alike).
     unsigned hanging = 0;
     std::array<std::int32_t, 6> mid_id{};
     std::array<LatticeKey3, 10> keys{};
-    for (int i = 0; i < 4; ++i) keys[static_cast<std::size_t>(i)] = grid::key3(v[i]);
+    std::array<grid::LatticePoint3, 10> frame{};
+    for (int i = 0; i < 4; ++i) {
+      frame[static_cast<std::size_t>(i)] = v[i];
+      keys[static_cast<std::size_t>(i)] = grid::key3(lattice().canonical_point(v[i]));
+    }
     if (level < forest_.lattice().max_level && nodes_.may_hang(ids, level))
       for (int e = 0; e < 6; ++e) {
-        const LatticeKey3 k = grid::midpoint_key3(keys[tet::kEdges[e][0]], keys[tet::kEdges[e][1]]);
+        const auto& a = v[tet::kEdges[e][0]];
+        const auto& b = v[tet::kEdges[e][1]];
+        const grid::LatticePoint3 m{(a[0] + b[0]) / 2, (a[1] + b[1]) / 2, (a[2] + b[2]) / 2};
+        const LatticeKey3 k = grid::key3(lattice().canonical_point(m));
+        frame[static_cast<std::size_t>(tet::midpoint(e))] = m;
         keys[static_cast<std::size_t>(tet::midpoint(e))] = k;
         mid_id[static_cast<std::size_t>(e)] = nodes_.id(k);
         if (mid_id[static_cast<std::size_t>(e)] >= 0) hanging |= 1u << e;
       }
     const std::array<std::int32_t, 4> vid{ids[0], ids[1], ids[2], ids[3]};
     if (hanging) {
-      close(t, vid, keys, mid_id, hanging);
+      close(t, vid, keys, frame, mid_id, hanging);
       return;
     }
     tetrahedron(vid, v, nodes_.edges_of(t), Origin::kept);
@@ -147,53 +183,56 @@ class Subdivider3 {
   // phase-changing edges (null: look them up by their keys, for swapped cubes' tets).
   void tetrahedron(const std::array<std::int32_t, 4>& vid, const std::array<grid::LatticePoint3, 4>& lattice,
                    const std::array<std::int32_t, 6>* leaf_edges, Origin whole) {
+    // Positions in the tet's frame (`lattice`: its frame points), node ids canonical; the
+    // output points are the images the frame sees.
     std::array<Vec3, 4> pos{};
     std::array<PhaseMask, 4> mask{};
     std::array<grid::stencil3::PointId, 4> id{};
+    std::array<std::uint8_t, 4> shift{};
     for (int i = 0; i < 4; ++i) {
       const auto k = static_cast<std::size_t>(i);
-      pos[k] = position(vid[k]);
+      shift[k] = this->lattice().image_shift(lattice[k]);
+      pos[k] = this->lattice().shifted(position(vid[k]), shift[k]);
       mask[k] = mask_of(vid[k]);
       const LatticeKey3 key = nodes_.key[static_cast<std::size_t>(vid[k])];
       id[k] = {key, key};
     }
     std::array<std::int32_t, 10> point{vid[0], vid[1], vid[2], vid[3], -1, -1, -1, -1, -1, -1};
     const auto o = grid::stencil3::outcome(lattice, pos, mask, id, [&](int e, Vec3& p, grid::stencil3::PointId& pid) {
-      const std::int32_t a = vid[tet::kEdges[e][0]], b = vid[tet::kEdges[e][1]];
+      const auto ea = tet::kEdges[e][0], eb = tet::kEdges[e][1];
       const auto m = static_cast<std::size_t>(tet::midpoint(e));
+      const std::uint8_t edge_shift = shift[ea] & shift[eb];
+      const auto take = [&](const radapt::EdgeCut& cut, std::int32_t node) {
+        p = this->lattice().shifted(cut.point, edge_shift), pid = {cut.lo, cut.hi}, point[m] = output_id(node, edge_shift);
+        return true;
+      };
       if (leaf_edges != nullptr) {
         const std::int32_t ei = (*leaf_edges)[static_cast<std::size_t>(e)];
         if (ei < 0) return false;
-        const radapt::EdgeCut& cut = nodes_.edges[static_cast<std::size_t>(ei)];
-        p = cut.point, pid = {cut.lo, cut.hi}, point[m] = cut_node(ei);
-        return true;
+        return take(nodes_.edges[static_cast<std::size_t>(ei)], cut_node(ei));
       }
-      const LatticeKey3 ka = nodes_.key[static_cast<std::size_t>(a)], kb = nodes_.key[static_cast<std::size_t>(b)];
-      if (const std::int32_t ei = nodes_.edge(ka, kb); ei >= 0) {
-        const radapt::EdgeCut& cut = nodes_.edges[static_cast<std::size_t>(ei)];
-        p = cut.point, pid = {cut.lo, cut.hi}, point[m] = cut_node(ei);
-        return true;
-      }
-      if (const std::int32_t si = swaps_ == nullptr ? -1 : swaps_->new_cut(ka, kb); si >= 0) {
-        const radapt::EdgeCut& cut = swaps_->new_cuts[static_cast<std::size_t>(si)];
-        p = cut.point, pid = {cut.lo, cut.hi}, point[m] = swap_cut_node(si);
-        return true;
-      }
+      const radapt::EdgeFrame frame = radapt::edge_frame(this->lattice(), lattice[ea], lattice[eb]);
+      if (const std::int32_t ei = nodes_.edge(frame.lo(), frame.hi()); ei >= 0)
+        return take(nodes_.edges[static_cast<std::size_t>(ei)], cut_node(ei));
+      if (const std::int32_t si = swaps_ == nullptr ? -1 : swaps_->new_cut(frame.lo(), frame.hi()); si >= 0)
+        return take(swaps_->new_cuts[static_cast<std::size_t>(si)], swap_cut_node(si));
       return false;
     });
+    for (int i = 0; i < 4; ++i) point[static_cast<std::size_t>(i)] = output_id(vid[static_cast<std::size_t>(i)], shift[static_cast<std::size_t>(i)]);
+    const std::array<std::int32_t, 4> out{point[0], point[1], point[2], point[3]};
     using Kind = grid::stencil3::Outcome::Kind;
     if (o.kind == Kind::kept) {
       // A leaf with no moved vertex is a honeycomb tet (aspect ratio 1, or 1.366 for a
       // corner tet), and the guard checked every deformed one.
       bool moved = whole != Origin::kept;
       for (std::int32_t n : vid) moved = moved || nodes_.moved(n);
-      emit(vid, tet_phase(vid), whole, moved ? -1.0 : kHoneycombWorst);
+      emit(out, tet_phase(out), whole, moved ? -1.0 : kHoneycombWorst);
       return;
     }
     ++out_.cut_tets;
     if (o.kind == Kind::unsplittable) {  // three or more phases meet: kept whole (counted)
       ++out_.unresolved;
-      emit(vid, tet_phase(vid), Origin::split);
+      emit(out, tet_phase(out), Origin::split);
       return;
     }
     for (int k = 0; k < o.split.count; ++k) {
@@ -204,7 +243,8 @@ class Subdivider3 {
   }
 
   void close(std::int32_t t, const std::array<std::int32_t, 4>& vid, const std::array<LatticeKey3, 10>& keys,
-             const std::array<std::int32_t, 6>& mid_id, unsigned hanging) {
+             const std::array<grid::LatticePoint3, 10>& frame, const std::array<std::int32_t, 6>& mid_id,
+             unsigned hanging) {
     ++out_.closed_tets;
     for (std::int32_t id : vid)
       CISAMR_CHECK(nodes_.state[static_cast<std::size_t>(id)] == radapt::NodeState::stayed,
@@ -213,11 +253,19 @@ class Subdivider3 {
     CISAMR_CHECK(single_bit(common), "subdivide3: a tet with hanging midpoints is cut (rule R4 broken)");
     const int phase = std::countr_zero(common);
     const auto& c = templates3::closure(forest_.kind(t), hanging, keys);
+    // Output points: the images the leaf's frame sees (lattice nodes only; unused
+    // midpoints stay -1).
     std::array<std::int32_t, 11> point{};
-    for (int i = 0; i < 4; ++i) point[static_cast<std::size_t>(i)] = vid[static_cast<std::size_t>(i)];
-    for (int e = 0; e < 6; ++e) point[static_cast<std::size_t>(tet::midpoint(e))] = mid_id[static_cast<std::size_t>(e)];
+    for (int i = 0; i < 4; ++i)
+      point[static_cast<std::size_t>(i)] =
+          output_id(vid[static_cast<std::size_t>(i)], lattice().image_shift(frame[static_cast<std::size_t>(i)]));
+    for (int e = 0; e < 6; ++e) {
+      const std::int32_t m = mid_id[static_cast<std::size_t>(e)];
+      point[static_cast<std::size_t>(tet::midpoint(e))] =
+          m < 0 ? m : output_id(m, lattice().image_shift(frame[static_cast<std::size_t>(tet::midpoint(e))]));
+    }
     if (c.uses_steiner) {
-      const std::array<Vec3, 4> corners{position(vid[0]), position(vid[1]), position(vid[2]), position(vid[3])};
+      const std::array<Vec3, 4> corners{position(point[0]), position(point[1]), position(point[2]), position(point[3])};
       point[templates3::kSteiner] = add_point(templates3::steiner_position(c, corners), common);
       ++out_.steiner_points;
     }

@@ -83,9 +83,9 @@ TEST_F(Cli, MalformedScenesExitWithCode2NamingFileAndFieldAndLeaveNoOutput) {
         "domain": {"min": [0, 0], "max": [10, 10], "periodic": true}, "mesh": {"h": 1},
         "inclusions": [{"shape": "circle", "center": [5, 5], "radius": 60}]})",
        "inclusions[0]"},
-      {"periodic-3d", R"({"format": "cisamr-scene/1", "dimension": 3,
-        "domain": {"min": [0, 0, 0], "max": [4, 4, 4], "periodic": true}, "mesh": {"h": 1}, "inclusions": []})",
-       "domain.periodic"},
+      {"periodic-3d-odd-cells", R"({"format": "cisamr-scene/1", "dimension": 3,
+        "domain": {"min": [0, 0, 0], "max": [5, 4, 4], "periodic": true}, "mesh": {"h": 1}, "inclusions": []})",
+       "even number, at least 4"},
   };
   for (const BadScene& c : cases) {
     SCOPED_TRACE(c.name);

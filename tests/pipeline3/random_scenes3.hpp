@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "core/error.hpp"
 #include "geometry/scene.hpp"
 
 namespace cisamr::testing {
@@ -421,5 +422,41 @@ class RandomScene3 {
     }
   }
 };
+
+// The random scene made periodic (by seed: every axis, x only, or x and y), its box cut
+// to an even number of cells of at least 4 per periodic axis (the five-tetrahedron grid
+// closes on a torus only so). Placed for a box, some inclusions overlap an image of one of
+// another phase: those are dropped, one at a time, as the oracle names them (the error a
+// user would get); `make_oracle` builds the oracle (the caller's, so this header needs no
+// geometry library).
+template <class MakeOracle>
+geometry::SceneDesc periodic_scene3(std::uint64_t seed, const StlShapes& stl, MakeOracle&& make_oracle) {
+  geometry::SceneDesc s = RandomScene3(seed, stl).make();
+  switch (seed % 3) {
+    case 1: s.periodic = {true, false, false}; break;
+    case 2: s.periodic = {true, true, false}; break;
+    default: s.periodic = {true, true, true};
+  }
+  for (int d = 0; d < 3; ++d) {
+    if (!s.periodic[static_cast<std::size_t>(d)]) continue;
+    long cells = std::lround((s.domain_max[d] - s.domain_min[d]) / s.h);
+    cells = std::max(4L, cells - cells % 2);
+    s.domain_max[d] = s.domain_min[d] + s.h * static_cast<double>(cells);
+  }
+  for (int attempt = 0; attempt < 20 && !s.inclusions.empty(); ++attempt) {
+    try {
+      make_oracle(s);
+      break;
+    } catch (const InputError& e) {
+      const std::string field = e.field();
+      // An image of another phase overlapping, or a fibre longer than the images reach.
+      if (e.problem().find("periodic image") == std::string::npos && e.problem().find("periods") == std::string::npos)
+        throw;
+      const std::size_t k = std::stoul(field.substr(field.find('[') + 1));
+      s.inclusions.erase(s.inclusions.begin() + static_cast<std::ptrdiff_t>(k));
+    }
+  }
+  return s;
+}
 
 }  // namespace cisamr::testing

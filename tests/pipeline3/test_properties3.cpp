@@ -37,6 +37,7 @@
 #include "pipeline/pipeline.hpp"
 #include "quality/quality.hpp"
 #include "random_scenes3.hpp"
+#include "reference_volumes3.hpp"
 
 namespace cisamr {
 namespace {
@@ -150,41 +151,6 @@ std::string describe(const geometry::SceneDesc& s) {
   return d;
 }
 
-// Reference phase volumes: exact from the oracle when every inclusion is a sphere apart
-// from the others (closed forms); otherwise the midpoint rule on a grid of h/6 with
-// phase_at (relative error ~1e-3 on the resolved scenes where volumes are checked, well
-// below the 10 % asserted; the oracle's own integration of clipped or overlapping shapes
-// takes seconds per scene).
-std::vector<double> reference_volumes(const geometry::Oracle3& oracle) {
-  const geometry::SceneDesc& s = oracle.scene();
-  bool closed_form = true;
-  for (int i = 0; i < oracle.inclusion_count(); ++i)
-    closed_form = closed_form && oracle.interface_group(i) == i &&
-                  std::holds_alternative<geometry::Sphere>(s.inclusions[std::size_t(i)].shape);
-  if (closed_form) return oracle.phase_measures();
-  std::vector<double> volume(s.phases.size(), 0.0);
-  const double step = s.h / 6;
-  int n[3];
-  for (int d = 0; d < 3; ++d) n[d] = static_cast<int>(std::lround((s.domain_max[d] - s.domain_min[d]) / step));
-  double size[3];
-  for (int d = 0; d < 3; ++d) size[d] = (s.domain_max[d] - s.domain_min[d]) / n[d];
-  const double cell = size[0] * size[1] * size[2];
-  std::vector<std::int32_t> candidates;
-  for (int i = 0; i < n[0]; ++i)
-    for (int j = 0; j < n[1]; ++j) {
-      // One candidate query per column.
-      const Box3 column{{s.domain_min[0] + i * size[0], s.domain_min[1] + j * size[1], s.domain_min[2]},
-                        {s.domain_min[0] + (i + 1) * size[0], s.domain_min[1] + (j + 1) * size[1], s.domain_max[2]}};
-      oracle.candidates(column, candidates);
-      for (int k = 0; k < n[2]; ++k) {
-        const Vec3 p{s.domain_min[0] + (i + 0.5) * size[0], s.domain_min[1] + (j + 0.5) * size[1],
-                     s.domain_min[2] + (k + 0.5) * size[2]};
-        volume[std::size_t(oracle.phase_at(p, candidates))] += cell;
-      }
-    }
-  return volume;
-}
-
 double ms(std::chrono::steady_clock::duration d) { return std::chrono::duration<double, std::milli>(d).count(); }
 
 std::string fidelity_text(const quality::FidelityReport& f) {
@@ -223,7 +189,7 @@ void check_scene(std::uint64_t seed, Summary& sum) {
 
   // Conformity. With voids the expected volume is the box minus the meshed voids' exact
   // volume, up to their discretisation error.
-  const std::vector<double> exact = reference_volumes(*oracle);
+  const std::vector<double> exact = testing::reference_volumes(*oracle);
   const auto t2 = Clock::now();
   const Box3 domain{{scene.domain_min[0], scene.domain_min[1], scene.domain_min[2]},
                     {scene.domain_max[0], scene.domain_max[1], scene.domain_max[2]}};
