@@ -7,6 +7,7 @@
 #    shear): every element's strain equals the imposed one to 1e-6 relative, and the
 #    effective stiffness equals the material's (to ccx's 7 printed digits);
 #  - two materials: symmetric, and between the Reuss and Voigt bounds in the Loewner order;
+#  - the same on a small 3D periodic RVE (six unit strains, C3D4);
 #  - a mesh periodic along x only is refused (exit 2, one line), and ccx is never run.
 # Exit 77 (skipped) only when ccx is missing.
 # usage: fe_periodic.sh CISAMR SOURCE_DIR
@@ -58,6 +59,24 @@ check "$dir/r.json" "$uniform" "RVE, one material: uniform strain in every eleme
 bounded='r["asymmetry"] <= 1e-6 and r["min_eig_above_reuss"] >= -1e-6 * scale and r["min_eig_below_voigt"] >= -1e-6 * scale and R[0][0] * 1.01 < C[0][0] < V[0][0] * 0.99'
 /usr/bin/python3 "$hom" "$dir/rve.inp" --material matrix=1000,0.3 --material particle=20000,0.2 --json "$dir/r.json" > /dev/null || fail "two materials: run"
 check "$dir/r.json" "$bounded" "RVE, two materials: symmetric, between Reuss and Voigt"
+
+# 3D: a small periodic RVE made by the mesher (a sphere across a corner, a fibre through
+# two faces): one material gives uniform strain in every tetrahedron under the six unit
+# strains and the isotropic stiffness (E 1000, nu 0.3: C11 1346.15, C12 576.92, C44 384.62);
+# two materials lie between the bounds.
+cat > "$dir/rve3.json" <<'JSON'
+{"format": "cisamr-scene/1", "dimension": 3,
+ "domain": {"min": [0, 0, 0], "max": [1, 1, 1], "periodic": true}, "mesh": {"h": 0.25, "levels": 1},
+ "phases": [{"id": 1, "name": "matrix"}, {"id": 2, "name": "particle"}],
+ "inclusions": [{"shape": "sphere", "center": [0.95, 0.05, 0.9], "radius": 0.3, "phase": 2},
+                {"shape": "cylinder", "start": [0.5, -0.2, 0.45], "end": [0.5, 1.2, 0.45], "radius": 0.1, "phase": 2}]}
+JSON
+"$cisamr" mesh "$dir/rve3.json" -o "$dir/rve3.inp" -q || fail "mesh the 3D RVE"
+exact3='all(abs(C[i][i] - 1346.153846) <= 1e-6 * scale for i in range(3)) and all(abs(C[i][i] - 384.6153846) <= 1e-6 * scale for i in range(3, 6)) and abs(C[0][1] - 576.9230769) <= 1e-6 * scale'
+/usr/bin/python3 "$hom" "$dir/rve3.inp" --material matrix=1000,0.3 --material particle=1000,0.3 --json "$dir/r.json" > /dev/null || fail "3D one material: run"
+check "$dir/r.json" "r['max_strain_deviation'] <= 1e-6 and r['element_type'] == 'C3D4' and $exact3" "3D RVE, one material: uniform strain in every tetrahedron"
+/usr/bin/python3 "$hom" "$dir/rve3.inp" --material matrix=1000,0.3 --material particle=20000,0.2 --json "$dir/r.json" > /dev/null || fail "3D two materials: run"
+check "$dir/r.json" "$bounded" "3D RVE, two materials: symmetric, between Reuss and Voigt"
 
 /usr/bin/python3 "$hom" "$dir/x_only.inp" --material matrix=1000,0.3 --material particle=1000,0.3 > /dev/null 2> "$dir/err.txt"
 [ $? -eq 2 ] && grep -q "periodic along every axis" "$dir/err.txt" && [ "$(wc -l < "$dir/err.txt")" -eq 1 ] ||
