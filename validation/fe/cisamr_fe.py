@@ -370,19 +370,25 @@ def main(argv):
     u.add_argument("--workdir", help="keep the CalculiX job and its output here (default: a temporary folder)")
     u.add_argument("--json", metavar="OUT", help="write the results as JSON ('-': standard output)")
     u.add_argument("--ccx", default="ccx", help="the CalculiX executable (default ccx)")
-    args = parser.parse_args(argv)
+    return run_tool("cisamr_fe", parser.parse_args(argv), uniaxial, print_uniaxial)
+
+
+def run_tool(name, args, solve, print_result):
+    """The command-line tail the FE tools share: CalculiX present, solve, print the result
+    (to standard error when the JSON goes to standard output), write the JSON. Exit codes:
+    2 bad input (one line), 1 a failed solve, 0 done."""
     if shutil.which(args.ccx) is None:
-        print(f"cisamr_fe: error: {args.ccx}: CalculiX not found (Debian: apt-get install calculix-ccx)", file=sys.stderr)
+        print(f"{name}: error: {args.ccx}: CalculiX not found (Debian: apt-get install calculix-ccx)", file=sys.stderr)
         return 2
     try:
-        result = uniaxial(args)
+        result = solve(args)
     except InputProblem as e:
-        print(f"cisamr_fe: error: {e}", file=sys.stderr)
+        print(f"{name}: error: {e}", file=sys.stderr)
         return 2
     except RuntimeError as e:
-        print(f"cisamr_fe: {e}", file=sys.stderr)
+        print(f"{name}: {e}", file=sys.stderr)
         return 1
-    print_uniaxial(result, sys.stderr if args.json == "-" else sys.stdout)
+    print_result(result, sys.stderr if args.json == "-" else sys.stdout)
     if args.json:
         text = json.dumps(result, indent=1) + "\n"
         if args.json == "-":

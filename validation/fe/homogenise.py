@@ -331,27 +331,7 @@ def main(argv):
     parser.add_argument("--workdir", help="keep the CalculiX jobs and their output here")
     parser.add_argument("--json", metavar="OUT", help="write the results as JSON ('-': standard output)")
     parser.add_argument("--ccx", default="ccx", help="the CalculiX executable (default ccx)")
-    args = parser.parse_args(argv)
-    if shutil.which(args.ccx) is None:
-        print(f"homogenise: error: {args.ccx}: CalculiX not found (Debian: apt-get install calculix-ccx)", file=sys.stderr)
-        return 2
-    try:
-        result = homogenise(args)
-    except fe.InputProblem as e:
-        print(f"homogenise: error: {e}", file=sys.stderr)
-        return 2
-    except RuntimeError as e:
-        print(f"homogenise: {e}", file=sys.stderr)
-        return 1
-    print_result(result, sys.stderr if args.json == "-" else sys.stdout)
-    if args.json:
-        text = json.dumps(result, indent=1) + "\n"
-        if args.json == "-":
-            sys.stdout.write(text)
-        else:
-            with open(args.json, "w", encoding="utf-8") as f:
-                f.write(text)
-    return 0
+    return fe.run_tool("homogenise", parser.parse_args(argv), homogenise, print_result)
 
 
 if __name__ == "__main__":
