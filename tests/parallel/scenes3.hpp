@@ -16,6 +16,7 @@
 #include "pipeline/effective_levels.hpp"
 #include "pipeline/pipeline.hpp"
 #include "quality/quality.hpp"
+#include "support/periodic_images.hpp"
 
 namespace cisamr::parallel::testing {
 
@@ -147,16 +148,7 @@ inline geometry::SceneDesc periodic_packed_scene3(std::uint64_t seed, int levels
   geometry::SceneDesc s = packed_scene3(seed, levels, nx, ny, nz, count);
   s.source = "periodic-packed-scene-3d";
   s.periodic = {true, true, true};
-  for (int attempt = 0; attempt < 400; ++attempt) {
-    try {
-      const geometry::Oracle3 probe(s);
-      break;
-    } catch (const InputError& e) {
-      if (e.problem().find("periodic image") == std::string::npos) throw;
-      const std::string& field = e.field();
-      s.inclusions.erase(s.inclusions.begin() + static_cast<std::ptrdiff_t>(std::stoul(field.substr(field.find('[') + 1))));
-    }
-  }
+  cisamr::testing::drop_refused_images(s, [](const geometry::SceneDesc& scene) { const geometry::Oracle3 probe(scene); }, 400);
   return s;
 }
 

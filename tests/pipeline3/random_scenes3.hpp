@@ -12,8 +12,8 @@
 #include <string>
 #include <vector>
 
-#include "core/error.hpp"
 #include "geometry/scene.hpp"
+#include "support/periodic_images.hpp"
 
 namespace cisamr::testing {
 
@@ -443,19 +443,7 @@ geometry::SceneDesc periodic_scene3(std::uint64_t seed, const StlShapes& stl, Ma
     cells = std::max(4L, cells - cells % 2);
     s.domain_max[d] = s.domain_min[d] + s.h * static_cast<double>(cells);
   }
-  for (int attempt = 0; attempt < 20 && !s.inclusions.empty(); ++attempt) {
-    try {
-      make_oracle(s);
-      break;
-    } catch (const InputError& e) {
-      const std::string field = e.field();
-      // An image of another phase overlapping, or a fibre longer than the images reach.
-      if (e.problem().find("periodic image") == std::string::npos && e.problem().find("periods") == std::string::npos)
-        throw;
-      const std::size_t k = std::stoul(field.substr(field.find('[') + 1));
-      s.inclusions.erase(s.inclusions.begin() + static_cast<std::ptrdiff_t>(k));
-    }
-  }
+  drop_refused_images(s, make_oracle, 20);
   return s;
 }
 

@@ -11,6 +11,7 @@
 #include "core/error.hpp"
 #include "geometry/oracle.hpp"
 #include "geometry/scene.hpp"
+#include "support/periodic_images.hpp"
 
 namespace cisamr::testing {
 
@@ -228,17 +229,7 @@ inline geometry::SceneDesc periodic_scene(unsigned seed) {
     case 4: s.periodic = {false, true, false}; break;
     default: s.periodic = {true, true, false};
   }
-  for (int attempt = 0; attempt < 20; ++attempt) {
-    try {
-      const geometry::Oracle2 probe(s);
-      break;
-    } catch (const InputError& e) {
-      const std::string field = e.field();
-      if (e.problem().find("periodic image") == std::string::npos) throw;
-      const std::size_t k = std::stoul(field.substr(field.find('[') + 1));
-      s.inclusions.erase(s.inclusions.begin() + static_cast<std::ptrdiff_t>(k));
-    }
-  }
+  drop_refused_images(s, [](const geometry::SceneDesc& scene) { geometry::Oracle2 probe(scene); }, 20);
   return s;
 }
 
