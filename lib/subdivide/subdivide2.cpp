@@ -50,8 +50,9 @@ double split_quality(const QuadPoints& q, const std::array<Tri, N>& tris) {
 class Subdivider {
  public:
   Subdivider(const geometry::Oracle2& oracle, const samr::RefinedGrid2& g, const radapt::Nodes2& nodes,
-             double collapse_fraction)
-      : oracle_(oracle), g_(g), forest_(g.forest), nodes_(nodes), collapse_fraction_(collapse_fraction) {}
+             double collapse_fraction, double bound)
+      : oracle_(oracle), g_(g), forest_(g.forest), nodes_(nodes), collapse_fraction_(collapse_fraction),
+        bound_(bound) {}
 
   Triangles2 run(const grid::CellRange<2>& owned, Progress* progress) {
     const auto cells = static_cast<std::int64_t>(forest_.size());
@@ -71,6 +72,7 @@ class Subdivider {
   const grid::QuadForest& forest_;
   const radapt::Nodes2& nodes_;
   const double collapse_fraction_;
+  const double bound_;
   Triangles2 out_;
   std::vector<geometry::Crossing> crossings_;
 
@@ -215,37 +217,48 @@ class Subdivider {
   }
 
   void split_quad(QuadPoints& q, std::span<const std::int32_t> candidates, int level) {
+    constexpr double kNone = std::numeric_limits<double>::infinity();
     const bool cut = (q.m[0] & q.m[1] & q.m[2] & q.m[3]) == 0;
     if (cut) ++out_.cut_quads;
     SplitChoice choice = best_split(q, candidates);
-    if (!(choice.worst < std::numeric_limits<double>::infinity())) {
+    if (!(choice.worst <= bound_)) {
       // A feature below this level's resolution (a tangency, a wedge sharper than the
-      // quality bound allows): collapse it. Each corner also counts as lying in the phases
-      // whose closure is within reach of it, reach growing from alpha·h_l to 3·alpha·h_l
-      // until a split is admissible; the largest distance used is reported.
+      // quality bound allows, two interfaces in one cell): collapse it. Each corner also
+      // counts as lying in the phases whose closure is within reach of it, reach growing
+      // from alpha·h_l to 3·alpha·h_l until a split is admissible and within the bound;
+      // the largest distance used is reported. Without such a split, the best admissible
+      // one is kept (the uncollapsed split first: it is faithful to the geometry).
       const PhaseMask present = q.m[0] | q.m[1] | q.m[2] | q.m[3];
       double distance[4][64];
       for (int k = 0; k < 4; ++k)
         for (PhaseMask rest = present & ~q.m[k]; rest; rest &= rest - 1)
           distance[k][std::countr_zero(rest)] = oracle_.distance_to_phase(q.p[k], std::countr_zero(rest));
       const PhaseMask original[4] = {q.m[0], q.m[1], q.m[2], q.m[3]};
+      SplitChoice collapsed;  // the first within the bound, else the first admissible
+      PhaseMask collapsed_masks[4] = {};
       double deviation = 0;
-      for (int step = 1; step <= 3 && !(choice.worst < std::numeric_limits<double>::infinity()); ++step) {
+      for (int step = 1; step <= 3 && !(collapsed.worst <= bound_); ++step) {
         const double reach = step * collapse_fraction_ * forest_.lattice().spacing(level);
-        deviation = 0;
+        double step_deviation = 0;
         for (int k = 0; k < 4; ++k) {
           q.m[k] = original[k];
           for (PhaseMask rest = present & ~original[k]; rest; rest &= rest - 1) {
             const int phase = std::countr_zero(rest);
             if (distance[k][phase] <= reach) {
               q.m[k] |= PhaseMask{1} << phase;
-              deviation = std::max(deviation, distance[k][phase]);
+              step_deviation = std::max(step_deviation, distance[k][phase]);
             }
           }
         }
-        choice = best_split(q, candidates);
+        const SplitChoice attempt = best_split(q, candidates);
+        if (attempt.worst <= bound_ || (attempt.worst < kNone && !(collapsed.worst < kNone))) {
+          collapsed = attempt, deviation = step_deviation;
+          std::copy(q.m, q.m + 4, collapsed_masks);
+        }
       }
-      if (choice.worst < std::numeric_limits<double>::infinity()) {
+      if (collapsed.worst <= bound_ || (collapsed.worst < kNone && !(choice.worst < kNone))) {
+        choice = collapsed;
+        std::copy(collapsed_masks, collapsed_masks + 4, q.m);
         ++out_.collapsed;
         out_.max_collapse_deviation = std::max(out_.max_collapse_deviation, deviation);
         out_.max_collapse_ratio = std::max(out_.max_collapse_ratio, deviation / forest_.lattice().spacing(level));
@@ -253,6 +266,8 @@ class Subdivider {
         if (out_.collapsed_at.size() < 16)
           out_.collapsed_at.push_back({0.25 * (q.p[0][0] + q.p[1][0] + q.p[2][0] + q.p[3][0]),
                                        0.25 * (q.p[0][1] + q.p[1][1] + q.p[2][1] + q.p[3][1])});
+      } else {
+        std::copy(original, original + 4, q.m);
       }
     }
     if (!(choice.worst < std::numeric_limits<double>::infinity())) {
@@ -289,8 +304,8 @@ class Subdivider {
 
 Triangles2 subdivide2(const geometry::Oracle2& oracle, const samr::RefinedGrid2& grid,
                       const radapt::Nodes2& nodes, const grid::CellRange<2>& owned, double collapse_fraction,
-                      Progress* progress) {
-  return Subdivider(oracle, grid, nodes, collapse_fraction).run(owned, progress);
+                      Progress* progress, double bound) {
+  return Subdivider(oracle, grid, nodes, collapse_fraction, bound).run(owned, progress);
 }
 
 }  // namespace cisamr::subdivide

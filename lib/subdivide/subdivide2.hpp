@@ -40,9 +40,10 @@ struct Triangles2 {
 };
 
 // Triangulates the leaves whose coarse ancestor lies in `owned` (the partition box).
-// `progress` (may be null) is advanced over the forest's cells.
+// `progress` (may be null) is advanced over the forest's cells. A quad whose best split
+// exceeds `bound` (DESIGN.md §2.2: 3 in 2D) is collapsed when that brings it within.
 Triangles2 subdivide2(const geometry::Oracle2& oracle, const samr::RefinedGrid2& grid,
                       const radapt::Nodes2& nodes, const grid::CellRange<2>& owned,
-                      double collapse_fraction = 0.5, Progress* progress = nullptr);
+                      double collapse_fraction = 0.5, Progress* progress = nullptr, double bound = 3.0);
 
 }  // namespace cisamr::subdivide
