@@ -11,13 +11,16 @@
 
 #include "core/error.hpp"
 #include "geometry/oracle.hpp"
+#include "geometry/periodic.hpp"
 #include "io/mesh_io.hpp"
 #include "io/mesh_svg.hpp"
 #include "io/scene_io.hpp"
 #include "mesh/metrics.hpp"
+#include "mesh/periodic_links.hpp"
 #include "parallel/checksum.hpp"
 #include "parallel/collective.hpp"
 #include "parallel/merge.hpp"
+#include "parallel/periodic_masters.hpp"
 
 namespace cisamr::driver {
 namespace {
@@ -100,6 +103,7 @@ void mesh_sequential(const Comm& comm, const geometry::SceneDesc& scene, MeshRun
   m.phases = scene.phases;
   for (int d = 0; d < Dim; ++d) m.domain.min[d] = scene.domain_min[d], m.domain.max[d] = scene.domain_max[d];
   m.scene_inclusions = static_cast<std::int64_t>(scene.inclusions.size());
+  if (scene.any_periodic()) m.periodic_images = geometry::images_in_domain(oracle.scene(), {});
   parallel::PartitionSummary whole;
   whole.elements = m.global_cells;
   whole.nodes = m.piece.global_nodes;
@@ -136,6 +140,12 @@ void take_figures(const Comm& comm, MeshRun<Dim>& run) {
     if (run.options.figures) run.phase_figures = phase_figures(comm, piece, run.mesh.phases);
   }
   if (run.options.figures) run.checksum = parallel::mesh_checksum(comm, piece);
+  if (run.any_periodic()) {  // every node on a max face is a slave (each eliminated once)
+    std::int64_t slaves = 0;
+    for (std::int64_t n = 0; n < run.mesh.piece.owned_nodes; ++n)
+      slaves += mesh::periodic_shift<Dim>(&piece.coords[static_cast<std::size_t>(n) * Dim], run.face_box, run.periodic) != 0;
+    run.periodic_slaves = comm.allreduce_sum(slaves);
+  }
 }
 
 }  // namespace
@@ -247,6 +257,10 @@ void write_outputs(const Comm& comm, MeshRun<Dim>& run, const Output& output, co
     options.periodic[static_cast<std::size_t>(d)] = run.periodic[static_cast<std::size_t>(d)];
     options.period[static_cast<std::size_t>(d)] = run.period[d];
   }
+  if (output.pieces && run.any_periodic()) {  // the masters of this rank's slaves, from any rank
+    ScopedPhase exchange(&run.mesh.times, "periodic");
+    options.periodic_master = parallel::periodic_masters<Dim>(comm, piece.mesh, run.face_box, run.periodic);
+  }
   if (output.pieces)
     parallel::write_pvtu<Dim>(comm, output.path, piece.mesh, run.mesh.phases, options);
   else
@@ -271,11 +285,12 @@ void finish(const Comm& comm, MeshRun<Dim>& run) {
   // the phases it ran.
   static const std::vector<std::string> kPhases = {"read",      "partition", "ghost",  "oracle",
                                                    "samr",      "radapt",    "faceswap", "subdivide",
-                                                   "assemble",  "merge",     "quality", "write",
-                                                   "total"};
+                                                   "assemble",  "merge",     "quality", "periodic",
+                                                   "write",     "total"};
   std::vector<std::string> names;
   for (const std::string& name : kPhases)
-    if (run.distributed || std::ranges::any_of(run.mesh.times.phases(), [&](const auto& p) { return p.first == name; }))
+    if ((run.distributed && (name != "periodic" || run.any_periodic())) ||
+        std::ranges::any_of(run.mesh.times.phases(), [&](const auto& p) { return p.first == name; }))
       names.push_back(name);
   run.timings = parallel::spread_over_ranks(comm, run.mesh.times, names);
   run.total_seconds = run.timings.back().max;

@@ -69,6 +69,8 @@ struct MeshRun {
   // axis (face_box.max = fl(face_box.min + period)): the writers' periodic constraints.
   std::array<bool, Dim> periodic{};
   Vec<Dim> period{};
+  std::int64_t periodic_slaves = 0;  // nodes on a periodic max face, over every rank
+  bool any_periodic() const { return std::ranges::any_of(periodic, [](bool p) { return p; }); }
   double bound = 0;
   quality::AspectStats aspect;              // of the whole mesh
   std::vector<PhaseFigures> phase_figures;  // per scene phase (Options::figures)

@@ -103,6 +103,17 @@ std::string report(const MeshRun<Dim>& run, const std::string& scene_path, const
       j["stl_files_read"] = {{"min", run.stl_files_read.min}, {"max", run.stl_files_read.max},
                              {"total", run.stl_files_read.total}};
   }
+  if (run.any_periodic()) {
+    // The torus: its axes and periods, the images the listed inclusions brought in, the slaves
+    // the writers constrain, and (pieces of a parallel run) the exchange that found their masters.
+    nlohmann::json periodic = {{"axes", std::vector<bool>(run.periodic.begin(), run.periodic.end())},
+                               {"period", std::vector<double>(run.period.begin(), run.period.end())},
+                               {"images", m.periodic_images},
+                               {"slaves", run.periodic_slaves}};
+    for (const parallel::PhaseSpread& s : run.timings)
+      if (s.name == "periodic") periodic["master_exchange_s"] = s.max;
+    j["periodic"] = periodic;
+  }
   j["checksum"] = hex(run.checksum);
   return j.dump(2) + "\n";
 }

@@ -90,4 +90,18 @@ std::vector<Box3> expanded_boxes(const SceneDesc& expanded, std::span<const Box3
   return boxes;
 }
 
+std::int64_t images_in_domain(const SceneDesc& expanded, std::span<const Box3> known) {
+  const std::vector<Box3> boxes = expanded_boxes(expanded, known);
+  std::int64_t count = 0;
+  for (std::size_t k = 0; k < boxes.size(); ++k) {
+    if (expanded.listed(k) == k) continue;
+    bool enters = true;
+    for (int d = 0; d < expanded.dimension; ++d)
+      enters = enters && boxes[k].min[d] < expanded.domain_max[static_cast<std::size_t>(d)] &&
+               boxes[k].max[d] > expanded.domain_min[static_cast<std::size_t>(d)];
+    count += enters;
+  }
+  return count;
+}
+
 }  // namespace cisamr::geometry

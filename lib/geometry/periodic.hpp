@@ -31,4 +31,8 @@ SceneDesc expand_periodic(const SceneDesc& scene, double reach, std::span<const 
 // The boxes of an expanded scene's inclusions from the listed ones' `known` boxes.
 std::vector<Box3> expanded_boxes(const SceneDesc& expanded, std::span<const Box3> known);
 
+// How many images of an expanded scene enter the domain (their box meets its interior): the
+// copies a user sees wrap in, not those kept only for the reach beyond the faces.
+std::int64_t images_in_domain(const SceneDesc& expanded, std::span<const Box3> known);
+
 }  // namespace cisamr::geometry

@@ -305,6 +305,7 @@ DistributedMesh<Dim> mesh_distributed(const Comm& comm, geometry::SceneDesc scen
     run_collectively(comm, [&] {
       (void)scene_lattice<Dim>(scene, options.pipeline);  // refuses what it cannot mesh (3D) before expanding
       scene = geometry::expand_periodic(scene, geometry::periodic_reach(scene), known);
+      out.periodic_images = geometry::images_in_domain(scene, known);
       expanded_known = geometry::expanded_boxes(scene, known);
     });
   const std::vector<Box3>& known_boxes = scene.image_base.empty() ? known : expanded_known;

@@ -81,6 +81,7 @@ struct DistributedMesh {
   std::vector<geometry::Phase> phases;
   Box<Dim> domain{};
   std::int64_t scene_inclusions = 0;
+  std::int64_t periodic_images = 0;  // images of inclusions across periodic faces (geometry/periodic.hpp)
   std::int64_t global_cells = 0;
   std::string partition_method;
   std::vector<PartitionSummary> partitions;     // every partition, by id, on every rank

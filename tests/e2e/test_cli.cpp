@@ -198,4 +198,53 @@ TEST_F(Cli, Meshes3DScenesWithinTheBound) {
   }
 }
 
+// A periodic run's report describes the torus: its axes and periods, the images the listed
+// inclusions bring in (a circle across a corner: 3), and as many slaves as the .inp has
+// constrained nodes (one *EQUATION per slave and dof, counted from the file); a parallel run
+// writing pieces also times the exchange of masters. A non-periodic report has no such object.
+TEST_F(Cli, PeriodicReportDescribesTheTorus) {
+  const fs::path scene = dir / "torus.json";
+  std::ofstream(scene) << R"({"format": "cisamr-scene/1", "dimension": 2,
+    "domain": {"min": [0, 0], "max": [10, 8], "periodic": true}, "mesh": {"h": 1, "levels": 1},
+    "inclusions": [{"shape": "circle", "center": [9.4, 7.6], "radius": 2.2}]})";
+  const auto report_of = [&](const std::string& out, const std::string& extra) {
+    const fs::path report = dir / (out + ".json");
+    const CommandResult r = run("mesh " + scene.string() + " -o " + (dir / out).string() + " --report " +
+                                report.string() + extra);
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    std::ifstream in(report);
+    return nlohmann::json::parse(in);
+  };
+  const auto j = report_of("torus.inp", "");
+  ASSERT_TRUE(j.contains("periodic")) << j.dump();
+  const auto& p = j["periodic"];
+  EXPECT_EQ(p["axes"], nlohmann::json::array({true, true}));
+  EXPECT_EQ(p["period"], nlohmann::json::array({10.0, 8.0}));
+  EXPECT_EQ(p["images"], 3);
+  std::ifstream inp(dir / "torus.inp");
+  std::int64_t equations = 0;  // in *EQUATION blocks, each equation opens with its term count alone
+  bool in_equations = false;
+  for (std::string line; std::getline(inp, line);) {
+    if (line.rfind("*", 0) == 0) in_equations = line.rfind("*EQUATION", 0) == 0;
+    else if (in_equations && line.find(',') == std::string::npos) ++equations;
+  }
+  EXPECT_GT(equations, 0);
+  EXPECT_EQ(p["slaves"].get<std::int64_t>() * 2, equations);
+  EXPECT_FALSE(p.contains("master_exchange_s"));  // one file: the writer pairs the nodes itself
+
+  const auto pieces = report_of("torus.pvtu", " --partitions 3");
+  EXPECT_EQ(pieces["checksum"], j["checksum"]);
+  EXPECT_EQ(pieces["periodic"]["slaves"], p["slaves"]);
+  EXPECT_EQ(pieces["periodic"]["images"], 3);
+  EXPECT_GE(pieces["periodic"]["master_exchange_s"].get<double>(), 0.0);
+  EXPECT_TRUE(pieces["timings_s"].contains("periodic"));
+
+  std::ofstream(scene) << R"({"format": "cisamr-scene/1", "dimension": 2,
+    "domain": {"min": [0, 0], "max": [10, 8]}, "mesh": {"h": 1, "levels": 1},
+    "inclusions": [{"shape": "circle", "center": [9.4, 7.6], "radius": 2.2}]})";
+  const auto plain = report_of("plain.pvtu", " --partitions 3");
+  EXPECT_FALSE(plain.contains("periodic"));
+  EXPECT_FALSE(plain["timings_s"].contains("periodic"));
+}
+
 }  // namespace
