@@ -12,6 +12,19 @@ namespace cisamr::grid {
 
 using LatticeKey = std::uint64_t;  // 2D: (X << 32) | Y
 
+// x modulo n in [0, n) for n > 0, any sign of x. Periodic look-ups call it in the hot loops
+// (every forest find, node id): values within one period of the range take no division.
+inline std::int64_t wrap(std::int64_t x, std::int64_t n) {
+  if (x >= 0) {
+    if (x < n) [[likely]] return x;
+    if (x < 2 * n) return x - n;
+  } else if (x >= -n) {
+    return x + n;
+  }
+  x %= n;
+  return x < 0 ? x + n : x;
+}
+
 // A half-open range of coarse cells [lo, hi) per axis, in global coarse indices.
 template <int Dim>
 struct CellRange {
@@ -47,10 +60,7 @@ struct Lattice {
   double period(int d) const { return static_cast<double>(coarse_cells[d]) * h; }
   // A fine coordinate reduced into [0, P) on a periodic axis; unchanged on the others.
   std::int64_t canonical(int d, std::int64_t x) const {
-    if (!periodic[d]) return x;
-    const std::int64_t p = fine_period(d);
-    x %= p;
-    return x < 0 ? x + p : x;
+    return periodic[d] ? wrap(x, fine_period(d)) : x;
   }
   // Which image of its canonical point a frame point ∈ [0, P] per axis is: bit d set where
   // the point is at P on a periodic axis (the canonical 0 seen from the cell before it).
@@ -86,10 +96,7 @@ struct Lattice {
   }
   // A cell index at `level` reduced into [0, N·2^level) on a periodic axis.
   std::int64_t canonical_cell(int d, int level, std::int64_t i) const {
-    if (!periodic[d]) return i;
-    const std::int64_t n = coarse_cells[d] << level;
-    i %= n;
-    return i < 0 ? i + n : i;
+    return periodic[d] ? wrap(i, coarse_cells[d] << level) : i;
   }
 
   // h·2^-level, exactly (a power-of-two scaling), without a libm call in hot loops.

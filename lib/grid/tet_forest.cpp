@@ -67,9 +67,7 @@ TetForest::TetForest(const Lattice3& lattice, const CellRange<3>& range) : latti
 
 std::int64_t TetForest::window_position(int d, std::int64_t c) const {
   if (!lattice_.periodic[d]) return c;
-  const std::int64_t n = lattice_.coarse_cells[d];
-  const std::int64_t offset = ((c - range_.lo[d]) % n + n) % n;
-  return range_.lo[d] + offset;
+  return range_.lo[d] + wrap(c - range_.lo[d], lattice_.coarse_cells[d]);
 }
 
 std::int32_t TetForest::root(std::int64_t ci, std::int64_t cj, std::int64_t ck, int local) const {

@@ -49,7 +49,7 @@ struct Nodes2 {
 
     // The window offset of canonical coarse node c along an axis starting at c0.
     static std::int64_t offset(std::int64_t c, std::int64_t c0, std::int64_t period) {
-      return period == 0 ? c - c0 : ((c - c0) % period + period) % period;
+      return period == 0 ? c - c0 : grid::wrap(c - c0, period);
     }
     std::int32_t* coarse_slot(std::int64_t x, std::int64_t y) {
       return const_cast<std::int32_t*>(static_cast<const Registry*>(this)->coarse_slot(x, y));
