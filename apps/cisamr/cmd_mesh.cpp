@@ -53,6 +53,13 @@ void run_mesh(MeshArgs& args, const GlobalFlags& flags, int& exit_code) {
   const driver::Output output =
       driver::plan_output(comm, args.output, args.gather, driver::is_distributed(comm, options), args.format,
                           args.plane == "strain" ? io::PlaneKind::strain : io::PlaneKind::stress);
+  if (options.pipeline.cohesive)
+    parallel::run_collectively(comm, [&] {
+      if (!output.pieces && (output.format ? *output.format : io::mesh_format_of(output.path)) == io::MeshFormat::medit)
+        throw InputError(output.path, "", "--cohesive: Medit .mesh cannot hold cohesive elements; write .vtu, .msh or .inp");
+      if (driver::is_distributed(comm, options))
+        throw InputError("--cohesive", "", "cohesive cells are not supported with --partitions or several MPI ranks yet");
+    });
   auto meshed = driver::mesh_scene(comm, args.scene, options);
   std::visit(
       [&](auto& run) {
@@ -120,6 +127,9 @@ void add_mesh_command(CLI::App& app, GlobalFlags& flags, int& exit_code) {
                   "Refuse a scene whose estimated mesh has more elements than this (default: what this "
                   "machine's memory holds, at 160 bytes per element)")
       ->check(number_in(1, 1e15));
+  cmd->add_flag("--cohesive", args->options.pipeline.cohesive,
+                "Zero-thickness cohesive elements on every interface between phases (COH2D4/COH3D6 in .inp, "
+                "quads/prisms in .msh, quads/wedges in .vtu), interface nodes split per phase");
   cmd->add_flag("--gather", args->gather,
                 "Parallel run: write one file on rank 0 (any format) instead of .pvtu pieces");
   cmd->add_flag("--fixed-ghost", args->fixed_ghost,

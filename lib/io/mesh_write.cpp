@@ -8,6 +8,7 @@
 #include <cstring>
 #include <filesystem>
 #include <limits>
+#include <numeric>
 #include <stdexcept>
 #include <string_view>
 
@@ -15,6 +16,7 @@
 #include "io/atomic_file.hpp"
 #include "io/mesh_io.hpp"
 #include "mesh/boundary.hpp"
+#include "mesh/cohesive.hpp"
 #include "mesh/metrics.hpp"
 #include "mesh/periodic_links.hpp"
 
@@ -94,7 +96,9 @@ void check_mesh(const mesh::SimplexMesh<Dim>& m) {
   const std::size_t cells = m.cell_count();
   if (m.coords.size() % Dim != 0 || m.cell_nodes.size() != cells * (Dim + 1) ||
       (!m.cell_partition.empty() && m.cell_partition.size() != cells) ||
-      (!m.node_global_id.empty() && m.node_global_id.size() != m.node_count()))
+      (!m.node_global_id.empty() && m.node_global_id.size() != m.node_count()) ||
+      m.cohesive.nodes.size() != m.cohesive.count() * 2 * Dim || m.cohesive.phase.size() != 2 * m.cohesive.count() ||
+      (m.cohesive.count() > 0 && m.node_phase.size() != m.node_count()))
     throw std::invalid_argument("write_mesh: inconsistent array sizes in the mesh");
   if (m.node_count() > static_cast<std::size_t>(std::numeric_limits<LocalId>::max()))
     throw std::invalid_argument("write_mesh: too many nodes for LocalId");
@@ -231,11 +235,14 @@ template <int Dim>
 void write_vtu_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m,
                     const std::vector<geometry::Phase>& phases, const MeshWriteOptions& options) {
   constexpr int kCorners = Dim + 1;
+  constexpr int kCohesiveCorners = 2 * Dim;
   const std::size_t nodes = m.node_count(), cells = m.cell_count();
+  // Cohesive cells follow the bulk cells (VTK quads / wedges, cell data cohesive = 1).
+  const std::size_t cohesive = m.cohesive.count(), all_cells = cells + cohesive;
+  const std::size_t connectivity = cells * kCorners + cohesive * kCohesiveCorners;
   if (!options.cell_aspect_ratio.empty() && options.cell_aspect_ratio.size() != cells)
     throw std::invalid_argument("write_mesh: cell_aspect_ratio has the wrong size");
-  const bool wide_offsets =
-      cells * kCorners > static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max());
+  const bool wide_offsets = connectivity > static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max());
   const std::size_t offset_size = wide_offsets ? 8 : 4;
 
   struct Array {
@@ -265,15 +272,23 @@ void write_vtu_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m,
   std::vector<Array> arrays = {
       {"PointData", "Int64", "global_id", 1, nodes * 8},
       {"PointData", "UInt8", "boundary", 1, nodes},
-      {"CellData", "Int32", "phase", 1, cells * 4},
-      {"CellData", "Int32", "partition", 1, cells * 4},
-      {"CellData", "Float64", "aspect_ratio", 1, cells * 8},
+      {"CellData", "Int32", "phase", 1, all_cells * 4},
+      {"CellData", "Int32", "partition", 1, all_cells * 4},
+      {"CellData", "Float64", "aspect_ratio", 1, all_cells * 8},
       {"Points", "Float64", "Points", 3, nodes * 3 * 8},
-      {"Cells", "Int32", "connectivity", 1, cells * kCorners * 4},
-      {"Cells", wide_offsets ? "Int64" : "Int32", "offsets", 1, cells * offset_size},
-      {"Cells", "UInt8", "types", 1, cells},
+      {"Cells", "Int32", "connectivity", 1, connectivity * 4},
+      {"Cells", wide_offsets ? "Int64" : "Int32", "offsets", 1, all_cells * offset_size},
+      {"Cells", "UInt8", "types", 1, all_cells},
   };
   if (periodic) arrays.insert(arrays.begin() + 2, {"PointData", "Int64", "periodic_master", 1, nodes * 8});
+  // Cohesive meshes: each node's phase (the copy it is), and per cell whether it is cohesive
+  // and its top phase (a bulk cell's own phase), after phase / partition / aspect_ratio.
+  if (cohesive > 0) {
+    const auto cell_data = std::find_if(arrays.begin(), arrays.end(), [](const Array& a) { return a.name == std::string_view("aspect_ratio"); });
+    arrays.insert(cell_data + 1, {{"CellData", "UInt8", "cohesive", 1, all_cells}, {"CellData", "Int32", "phase_top", 1, all_cells * 4}});
+    const auto point_data = std::find_if(arrays.begin(), arrays.end(), [](const Array& a) { return a.name == std::string_view("boundary"); });
+    arrays.insert(point_data + 1, {"PointData", "Int32", "node_phase", 1, nodes * 4});
+  }
 
   std::string xml;
   xml += "<?xml version=\"1.0\"?>\n";
@@ -296,7 +311,7 @@ void write_vtu_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m,
   }
   xml += "\n      </DataArray>\n    </FieldData>\n";
   xml += "    <Piece NumberOfPoints=\"" + std::to_string(nodes) + "\" NumberOfCells=\"" +
-         std::to_string(cells) + "\">\n";
+         std::to_string(all_cells) + "\">\n";
   // The appended blocks are laid out in the reverse of the declaration order. VTK does not
   // care; meshio (5.x) rewrites offsets one by one while looking tags up by offset, and
   // mixes up two arrays when a rewritten offset equals a later raw one: with the reverse
@@ -327,15 +342,27 @@ void write_vtu_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m,
   file.write(xml);
 
   // Blocks in reverse declaration order (see above).
+  using Order = mesh::CohesiveOrder<Dim>;
   const std::uint8_t cell_type = Dim == 2 ? 5 : 10;  // VTK_TRIANGLE, VTK_TETRA
-  write_array_chunked<std::uint8_t>(file, cells, [&](std::size_t) { return cell_type; });
+  write_array_chunked<std::uint8_t>(file, all_cells, [&](std::size_t c) {
+    return c < cells ? cell_type : static_cast<std::uint8_t>(Order::vtk_type);
+  });
+  const auto end_of = [&](std::size_t c) {
+    return c < cells ? (c + 1) * kCorners : cells * kCorners + (c + 1 - cells) * kCohesiveCorners;
+  };
   if (wide_offsets)
-    write_array_chunked<std::int64_t>(
-        file, cells, [](std::size_t c) { return std::int64_t(c + 1) * kCorners; });
+    write_array_chunked<std::int64_t>(file, all_cells, [&](std::size_t c) { return std::int64_t(end_of(c)); });
   else
-    write_array_chunked<std::int32_t>(
-        file, cells, [](std::size_t c) { return std::int32_t(c + 1) * kCorners; });
-  write_array_raw(file, m.cell_nodes);
+    write_array_chunked<std::int32_t>(file, all_cells, [&](std::size_t c) { return std::int32_t(end_of(c)); });
+  if (cohesive == 0) {
+    write_array_raw(file, m.cell_nodes);
+  } else {
+    write_array_chunked<std::int32_t>(file, connectivity, [&](std::size_t i) {
+      if (i < cells * kCorners) return m.cell_nodes[i];
+      const std::size_t j = i - cells * kCorners, c = j / kCohesiveCorners, k = j % kCohesiveCorners;
+      return m.cohesive.nodes[c * kCohesiveCorners + static_cast<std::size_t>(Order::vtk[k])];
+    });
+  }
   if constexpr (Dim == 3) {
     write_array_raw(file, m.coords);
   } else {
@@ -344,23 +371,65 @@ void write_vtu_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m,
       return axis < 2 ? m.coords[node * 2 + axis] : 0.0;
     });
   }
+  if (cohesive > 0) {  // phase_top, cohesive (reverse order)
+    write_array_chunked<std::int32_t>(file, all_cells, [&](std::size_t c) {
+      return c < cells ? m.cell_phase[c] : m.cohesive.phase[2 * (c - cells) + 1];
+    });
+    write_array_chunked<std::uint8_t>(file, all_cells, [&](std::size_t c) { return std::uint8_t(c >= cells); });
+  }
+  // A cohesive cell has no aspect ratio: 0.
   if (options.cell_aspect_ratio.empty())
-    write_array_chunked<double>(file, cells,
-                                [&](std::size_t c) { return mesh::cell_aspect_ratio(m, c); });
-  else
+    write_array_chunked<double>(file, all_cells,
+                                [&](std::size_t c) { return c < cells ? mesh::cell_aspect_ratio(m, c) : 0.0; });
+  else if (cohesive == 0)
     write_array_raw(file, options.cell_aspect_ratio);
-  if (m.cell_partition.empty())
-    write_array_chunked<std::int32_t>(file, cells, [](std::size_t) { return 0; });
   else
-    write_array_raw(file, m.cell_partition);
-  write_array_raw(file, m.cell_phase);
+    write_array_chunked<double>(file, all_cells,
+                                [&](std::size_t c) { return c < cells ? options.cell_aspect_ratio[c] : 0.0; });
+  write_array_chunked<std::int32_t>(file, all_cells, [&](std::size_t c) {
+    if (c >= cells) return m.cohesive.partition[c - cells];
+    return m.cell_partition.empty() ? 0 : m.cell_partition[c];
+  });
+  write_array_chunked<std::int32_t>(file, all_cells, [&](std::size_t c) {
+    return c < cells ? m.cell_phase[c] : m.cohesive.phase[2 * (c - cells)];
+  });
   if (periodic) write_array_raw(file, periodic_master);
+  if (cohesive > 0) write_array_raw(file, m.node_phase);
   write_array_raw(file, boundary_sets_for(m, options).node_faces);
   if (m.node_global_id.empty())
     write_array_chunked<std::int64_t>(file, nodes, [](std::size_t i) { return std::int64_t(i); });
   else
     write_array_raw(file, m.node_global_id);
   file.write("\n  </AppendedData>\n</VTKFile>\n");
+}
+
+std::string abaqus_label(const std::string& name);
+
+// Cohesive cells grouped by phase pair (ascending), each group's set name
+// COH_<lower phase name>_<other> (Abaqus label rules, also the Gmsh physical name).
+struct CohesiveGroups {
+  std::vector<std::pair<std::int32_t, std::int32_t>> pairs;
+  std::vector<std::string> names;
+  std::vector<std::size_t> order, begin;  // cells of group g: order[begin[g] .. begin[g+1])
+};
+template <int Dim>
+CohesiveGroups group_cohesive(const mesh::SimplexMesh<Dim>& m, const std::vector<geometry::Phase>& phases) {
+  CohesiveGroups groups;
+  const std::size_t count = m.cohesive.count();
+  const auto pair_of = [&](std::size_t c) { return std::pair(m.cohesive.phase[2 * c], m.cohesive.phase[2 * c + 1]); };
+  groups.order.resize(count);
+  std::iota(groups.order.begin(), groups.order.end(), std::size_t{0});
+  std::stable_sort(groups.order.begin(), groups.order.end(), [&](std::size_t a, std::size_t b) { return pair_of(a) < pair_of(b); });
+  for (std::size_t i = 0; i < count; ++i) {
+    const auto pair = pair_of(groups.order[i]);
+    if (!groups.pairs.empty() && groups.pairs.back() == pair) continue;
+    groups.pairs.push_back(pair);
+    groups.begin.push_back(i);
+    std::string lower = phase_name(phases, pair.first), upper = phase_name(phases, pair.second);
+    groups.names.push_back(abaqus_label("COH_" + lower + "_" + upper));
+  }
+  groups.begin.push_back(count);
+  return groups;
 }
 
 // ------------------------------------------------------------------------------ MSH 4.1
@@ -397,12 +466,17 @@ void write_msh_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m,
   const int face_physical_base = (groups.ids.empty() ? 0 : groups.ids.back()) + 1;
   std::size_t facet_total = 0;
   for (int f : faces) facet_total += sets.facets[static_cast<std::size_t>(f)].size();
+  // Cohesive cells: one Dim-dimensional entity and physical group per phase pair, tagged
+  // past the faces' physical tags (so past every phase id), quadrangles / prisms.
+  using Order = mesh::CohesiveOrder<Dim>;
+  const CohesiveGroups cohesive = group_cohesive(m, phases);
+  const int cohesive_base = face_physical_base + kFaces;
 
   TextWriter out(file);
   out << "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n";
 
   out << "$PhysicalNames\n";
-  out.integer(static_cast<long long>(groups.ids.size() + faces.size())) << '\n';
+  out.integer(static_cast<long long>(groups.ids.size() + faces.size() + cohesive.pairs.size())) << '\n';
   for (int id : groups.ids) {
     std::string name = phase_name(phases, id);
     std::replace(name.begin(), name.end(), '"', '\'');
@@ -412,6 +486,10 @@ void write_msh_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m,
   for (int f : faces) {
     out.integer(Dim - 1) << ' ';
     out.integer(face_physical_base + f) << " \"" << mesh::kBoxFaceNames[static_cast<std::size_t>(f)] << "\"\n";
+  }
+  for (std::size_t g = 0; g < cohesive.pairs.size(); ++g) {
+    out.integer(Dim) << ' ';
+    out.integer(cohesive_base + static_cast<int>(g)) << " \"" << cohesive.names[g] << "\"\n";
   }
   out << "$EndPhysicalNames\n";
 
@@ -429,11 +507,11 @@ void write_msh_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m,
   if constexpr (Dim == 2) {
     out << "0 ";
     out.integer(static_cast<long long>(faces.size())) << ' ';
-    out.integer(static_cast<long long>(entity_tags.size())) << " 0\n";
+    out.integer(static_cast<long long>(entity_tags.size() + cohesive.pairs.size())) << " 0\n";
   } else {
     out << "0 0 ";
     out.integer(static_cast<long long>(faces.size())) << ' ';
-    out.integer(static_cast<long long>(entity_tags.size())) << '\n';
+    out.integer(static_cast<long long>(entity_tags.size() + cohesive.pairs.size())) << '\n';
   }
   for (int f : faces) {
     EntityBox<Dim> box;
@@ -457,6 +535,14 @@ void write_msh_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m,
       out << " 0 0\n";
     else
       out << " 1 ", out.integer(entity_tags[g]) << " 0\n";
+  }
+  for (std::size_t g = 0; g < cohesive.pairs.size(); ++g) {
+    EntityBox<Dim> box;
+    for (std::size_t i = cohesive.begin[g]; i < cohesive.begin[g + 1]; ++i)
+      for (int k = 0; k < 2 * Dim; ++k) box.add(m, m.cohesive.cell(cohesive.order[i])[k]);
+    out.integer(cohesive_base + static_cast<int>(g));
+    write_box(box);
+    out << " 1 ", out.integer(cohesive_base + static_cast<int>(g)) << " 0\n";
   }
   out << "$EndEntities\n";
 
@@ -484,9 +570,9 @@ void write_msh_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m,
 
   // Element tag = cell index + 1, so that reading restores the original order; the
   // boundary lines / triangles follow, face by face.
-  const std::size_t elements = cells + facet_total;
+  const std::size_t elements = cells + facet_total + m.cohesive.count();
   out << "$Elements\n";
-  out.integer(static_cast<long long>(groups.ids.size() + faces.size())) << ' ';
+  out.integer(static_cast<long long>(groups.ids.size() + faces.size() + cohesive.pairs.size())) << ' ';
   out.integer(static_cast<long long>(elements)) << ' ';
   out.integer(elements > 0 ? 1 : 0) << ' ';
   out.integer(static_cast<long long>(elements)) << '\n';
@@ -511,6 +597,18 @@ void write_msh_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m,
     for (const mesh::CellFacet& facet : facets) {
       out.integer(static_cast<long long>(++tag));
       for (LocalId n : facet_nodes(m, facet)) out << ' ', out.integer(n + 1LL);
+      out << '\n';
+    }
+  }
+  for (std::size_t g = 0; g < cohesive.pairs.size(); ++g) {
+    out.integer(Dim) << ' ';
+    out.integer(cohesive_base + static_cast<int>(g)) << ' ';
+    out.integer(Order::gmsh_type) << ' ';
+    out.integer(static_cast<long long>(cohesive.begin[g + 1] - cohesive.begin[g])) << '\n';
+    for (std::size_t i = cohesive.begin[g]; i < cohesive.begin[g + 1]; ++i) {
+      out.integer(static_cast<long long>(++tag));
+      const LocalId* nodes = m.cohesive.cell(cohesive.order[i]);
+      for (int k : Order::gmsh) out << ' ', out.integer(nodes[k] + 1LL);
       out << '\n';
     }
   }
@@ -642,6 +740,30 @@ void write_inp_constraints(TextWriter& out, const mesh::SimplexMesh<Dim>& m, con
     }
 }
 
+// Cohesive cells after the bulk ones (ids continue theirs), one ELSET per phase pair,
+// COH_<lower phase name>_<other>, in the node order of Abaqus COH2D4 / COH3D6 (mesh/cohesive.hpp):
+// the default STACK DIRECTION of a *COHESIVE SECTION points from the bottom (lower phase id)
+// to the top.
+template <int Dim>
+void write_inp_cohesive(TextWriter& out, const mesh::SimplexMesh<Dim>& m, const std::vector<geometry::Phase>& phases) {
+  using Order = mesh::CohesiveOrder<Dim>;
+  const CohesiveGroups groups = group_cohesive(m, phases);
+  for (std::size_t g = 0; g < groups.pairs.size(); ++g) {
+    // Our reader takes the two phase ids from this comment; Abaqus ignores it.
+    out << "** cisamr cohesive ";
+    out.integer(groups.pairs[g].first) << ' ';
+    out.integer(groups.pairs[g].second) << ' ' << groups.names[g] << '\n';
+    out << "*ELEMENT, TYPE=" << Order::abaqus_type << ", ELSET=" << groups.names[g] << '\n';
+    for (std::size_t i = groups.begin[g]; i < groups.begin[g + 1]; ++i) {
+      const std::size_t c = groups.order[i];
+      out.integer(static_cast<long long>(m.cell_count() + c + 1));
+      const LocalId* nodes = m.cohesive.cell(c);
+      for (int k : Order::abaqus) out << ", ", out.integer(nodes[k] + 1LL);
+      out << '\n';
+    }
+  }
+}
+
 template <int Dim>
 void write_inp_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m,
                     const std::vector<geometry::Phase>& phases, const MeshWriteOptions& options) {
@@ -689,6 +811,7 @@ void write_inp_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m,
       out << '\n';
     }
   }
+  write_inp_cohesive(out, m, phases);
 
   // Boundary sets (DESIGN.md §7); a face no node lies on (a void covers it) has none.
   const mesh::BoundarySets<Dim> sets = boundary_sets_for(m, options);

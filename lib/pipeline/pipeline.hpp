@@ -30,6 +30,9 @@ struct Options {
   int max_candidates3 = 2;  // snap candidates per node the 3D guard considers
   double bound3 = 5.0;
   double swap_trigger3 = 3.0;  // corner tets above this aspect ratio look for a face swap (0: none)
+  // Cohesive cells on every interface between phases, interface nodes split per phase
+  // (mesh/cohesive.hpp). `mesh` only: the whole domain of a scene that is not periodic.
+  bool cohesive = false;
   // Told of the stages (levels, samr, radapt, ...) as they begin, and advanced within each.
   Progress* progress = nullptr;
 };
