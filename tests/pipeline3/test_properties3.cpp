@@ -38,6 +38,7 @@
 #include "quality/quality.hpp"
 #include "random_scenes3.hpp"
 #include "reference_volumes3.hpp"
+#include "support/cohesive_split.hpp"
 
 namespace cisamr {
 namespace {
@@ -229,6 +230,8 @@ void check_scene(std::uint64_t seed, Summary& sum) {
       fidelity.nodes_off_phase + fidelity.interface_nodes_off_interface + fidelity.boundary_nodes_off_void;
   EXPECT_EQ(off, 0u) << "nodes off their phase beyond the collapse deviation: " << fidelity_text(fidelity);
   EXPECT_EQ(fidelity.cells_unknown_phase, 0u);
+  // The same mesh split with cohesive cells (issue #13), checked independently.
+  EXPECT_TRUE(testing::cohesive_split_is_right(m));
   if (resolved && gen.smooth())
     EXPECT_EQ(fidelity.cells_wrong_phase, 0u) << "tets lying in another phase: " << fidelity_text(fidelity);
   if (resolved && gen.smooth())
