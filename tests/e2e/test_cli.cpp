@@ -247,4 +247,36 @@ TEST_F(Cli, PeriodicReportDescribesTheTorus) {
   EXPECT_FALSE(plain["timings_s"].contains("periodic"));
 }
 
+// --cohesive (issue #13): a Medit file cannot hold cohesive cells, and periodic scenes and
+// partitions do not have them yet: exit 2 naming what is wrong, no output of any kind.
+// Otherwise every format holds them: .vtu quads with cell data cohesive = 1.
+TEST_F(Cli, CohesiveRefusalsAndOutput) {
+  const fs::path scene = dir / "two.json";
+  std::ofstream(scene) << R"({"format": "cisamr-scene/1", "dimension": 2,
+    "domain": {"min": [0, 0], "max": [10, 8]}, "mesh": {"h": 1, "levels": 1},
+    "inclusions": [{"shape": "circle", "center": [4.4, 3.6], "radius": 2.2}]})";
+  const fs::path periodic = dir / "torus.json";
+  std::ofstream(periodic) << R"({"format": "cisamr-scene/1", "dimension": 2,
+    "domain": {"min": [0, 0], "max": [10, 8], "periodic": true}, "mesh": {"h": 1, "levels": 1},
+    "inclusions": [{"shape": "circle", "center": [4.4, 3.6], "radius": 2.2}]})";
+  struct Refusal {
+    std::string args, says;
+  };
+  for (const Refusal& r : {Refusal{scene.string() + " -o " + (dir / "m.mesh").string(), "Medit"},
+                           Refusal{scene.string() + " -o " + (dir / "p.vtu").string() + " --partitions 2", "--cohesive"},
+                           Refusal{periodic.string() + " -o " + (dir / "t.vtu").string(), "domain.periodic"}}) {
+    SCOPED_TRACE(r.args);
+    const CommandResult c = run("mesh " + r.args + " --cohesive --report " + (dir / "r.json").string());
+    EXPECT_EQ(c.exit_code, 2) << c.output;
+    EXPECT_NE(c.output.find(r.says), std::string::npos) << c.output;
+    EXPECT_EQ(files_other_than_json(), 0u);
+  }
+  const CommandResult ok = run("mesh " + scene.string() + " -o " + (dir / "c.vtu").string() + " --cohesive");
+  EXPECT_EQ(ok.exit_code, 0) << ok.output;
+  std::ifstream vtu(dir / "c.vtu");
+  const std::string text((std::istreambuf_iterator<char>(vtu)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("Name=\"cohesive\""), std::string::npos);
+  EXPECT_NE(text.find("Name=\"node_phase\""), std::string::npos);
+}
+
 }  // namespace
