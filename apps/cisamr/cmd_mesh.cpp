@@ -57,8 +57,6 @@ void run_mesh(MeshArgs& args, const GlobalFlags& flags, int& exit_code) {
     parallel::run_collectively(comm, [&] {
       if (!output.pieces && (output.format ? *output.format : io::mesh_format_of(output.path)) == io::MeshFormat::medit)
         throw InputError(output.path, "", "--cohesive: Medit .mesh cannot hold cohesive elements; write .vtu, .msh or .inp");
-      if (driver::is_distributed(comm, options))
-        throw InputError("--cohesive", "", "cohesive cells are not supported with --partitions or several MPI ranks yet");
     });
   auto meshed = driver::mesh_scene(comm, args.scene, options);
   std::visit(

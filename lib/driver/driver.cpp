@@ -285,11 +285,11 @@ void finish(const Comm& comm, MeshRun<Dim>& run) {
   // the phases it ran.
   static const std::vector<std::string> kPhases = {"read",      "partition", "ghost",  "oracle",
                                                    "samr",      "radapt",    "faceswap", "subdivide",
-                                                   "assemble",  "merge",     "quality", "periodic",
+                                                   "assemble",  "cohesive",  "merge",   "quality", "periodic",
                                                    "write",     "total"};
   std::vector<std::string> names;
   for (const std::string& name : kPhases)
-    if ((run.distributed && (name != "periodic" || run.any_periodic())) ||
+    if ((run.distributed && (name != "periodic" || run.any_periodic()) && (name != "cohesive" || run.options.pipeline.cohesive)) ||
         std::ranges::any_of(run.mesh.times.phases(), [&](const auto& p) { return p.first == name; }))
       names.push_back(name);
   run.timings = parallel::spread_over_ranks(comm, run.mesh.times, names);

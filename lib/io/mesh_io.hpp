@@ -93,7 +93,7 @@ void write_vtu(const std::string& path, const mesh::SimplexMesh<Dim>& m,
 // The .pvtu text listing `pieces` (file names relative to the .pvtu), declaring the arrays
 // write_vtu writes (`periodic`: the pieces have periodic_master, as write_vtu writes it for
 // MeshWriteOptions::any_periodic()).
-std::string pvtu_text(const std::vector<std::string>& pieces, bool periodic = false);
+std::string pvtu_text(const std::vector<std::string>& pieces, bool periodic = false, bool cohesive = false);
 
 struct LoadedMesh {
   int dimension = 0;   // 2 or 3: which of mesh2 / mesh3 holds the mesh

@@ -239,6 +239,8 @@ void write_vtu_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m,
   const std::size_t nodes = m.node_count(), cells = m.cell_count();
   // Cohesive cells follow the bulk cells (VTK quads / wedges, cell data cohesive = 1).
   const std::size_t cohesive = m.cohesive.count(), all_cells = cells + cohesive;
+  // Every piece of a cohesive run declares the arrays, also one without cohesive cells.
+  const bool cohesive_arrays = cohesive > 0 || !m.node_phase.empty();
   const std::size_t connectivity = cells * kCorners + cohesive * kCohesiveCorners;
   if (!options.cell_aspect_ratio.empty() && options.cell_aspect_ratio.size() != cells)
     throw std::invalid_argument("write_mesh: cell_aspect_ratio has the wrong size");
@@ -283,7 +285,7 @@ void write_vtu_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m,
   if (periodic) arrays.insert(arrays.begin() + 2, {"PointData", "Int64", "periodic_master", 1, nodes * 8});
   // Cohesive meshes: each node's phase (the copy it is), and per cell whether it is cohesive
   // and its top phase (a bulk cell's own phase), after phase / partition / aspect_ratio.
-  if (cohesive > 0) {
+  if (cohesive_arrays) {
     const auto cell_data = std::find_if(arrays.begin(), arrays.end(), [](const Array& a) { return a.name == std::string_view("aspect_ratio"); });
     arrays.insert(cell_data + 1, {{"CellData", "UInt8", "cohesive", 1, all_cells}, {"CellData", "Int32", "phase_top", 1, all_cells * 4}});
     const auto point_data = std::find_if(arrays.begin(), arrays.end(), [](const Array& a) { return a.name == std::string_view("boundary"); });
@@ -371,7 +373,7 @@ void write_vtu_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m,
       return axis < 2 ? m.coords[node * 2 + axis] : 0.0;
     });
   }
-  if (cohesive > 0) {  // phase_top, cohesive (reverse order)
+  if (cohesive_arrays) {  // phase_top, cohesive (reverse order)
     write_array_chunked<std::int32_t>(file, all_cells, [&](std::size_t c) {
       return c < cells ? m.cell_phase[c] : m.cohesive.phase[2 * (c - cells) + 1];
     });
@@ -394,7 +396,7 @@ void write_vtu_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m,
     return c < cells ? m.cell_phase[c] : m.cohesive.phase[2 * (c - cells)];
   });
   if (periodic) write_array_raw(file, periodic_master);
-  if (cohesive > 0) write_array_raw(file, m.node_phase);
+  if (cohesive_arrays) write_array_raw(file, m.node_phase);
   write_array_raw(file, boundary_sets_for(m, options).node_faces);
   if (m.node_global_id.empty())
     write_array_chunked<std::int64_t>(file, nodes, [](std::size_t i) { return std::int64_t(i); });
@@ -955,7 +957,7 @@ template void write_vtu<2>(const std::string&, const mesh::Mesh2&, const std::ve
 template void write_vtu<3>(const std::string&, const mesh::Mesh3&, const std::vector<geometry::Phase>&,
                            const MeshWriteOptions&);
 
-std::string pvtu_text(const std::vector<std::string>& pieces, bool periodic) {
+std::string pvtu_text(const std::vector<std::string>& pieces, bool periodic, bool cohesive) {
   // The arrays write_vtu_file declares (field data is read from the pieces).
   std::string xml;
   xml += "<?xml version=\"1.0\"?>\n";
@@ -965,11 +967,16 @@ std::string pvtu_text(const std::vector<std::string>& pieces, bool periodic) {
   xml += "      <PDataArray type=\"Int64\" Name=\"global_id\"/>\n";
   xml += "      <PDataArray type=\"UInt8\" Name=\"boundary\"/>\n";
   if (periodic) xml += "      <PDataArray type=\"Int64\" Name=\"periodic_master\"/>\n";
+  if (cohesive) xml += "      <PDataArray type=\"Int32\" Name=\"node_phase\"/>\n";
   xml += "    </PPointData>\n";
   xml += "    <PCellData Scalars=\"phase\">\n";
   xml += "      <PDataArray type=\"Int32\" Name=\"phase\"/>\n";
   xml += "      <PDataArray type=\"Int32\" Name=\"partition\"/>\n";
   xml += "      <PDataArray type=\"Float64\" Name=\"aspect_ratio\"/>\n";
+  if (cohesive) {
+    xml += "      <PDataArray type=\"UInt8\" Name=\"cohesive\"/>\n";
+    xml += "      <PDataArray type=\"Int32\" Name=\"phase_top\"/>\n";
+  }
   xml += "    </PCellData>\n";
   xml += "    <PPoints>\n      <PDataArray type=\"Float64\" Name=\"Points\" NumberOfComponents=\"3\"/>\n    </PPoints>\n";
   for (const std::string& piece : pieces) xml += "    <Piece Source=\"" + piece + "\"/>\n";

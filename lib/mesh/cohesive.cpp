@@ -91,7 +91,6 @@ std::vector<LocalId> insert_cohesive(SimplexMesh<Dim>& m, std::int32_t partition
     }
   std::sort(facets.begin(), facets.end());
 
-  CohesiveCells<Dim>& out = m.cohesive;
   std::int64_t inserted = 0;
   for (std::size_t i = 0; i < facets.size();) {
     std::size_t j = i + 1;
@@ -104,26 +103,18 @@ std::vector<LocalId> insert_cohesive(SimplexMesh<Dim>& m, std::int32_t partition
       std::int32_t q = m.cell_phase[static_cast<std::size_t>(upper->cell)];
       if (p > q) std::swap(lower, upper), std::swap(p, q);
       if (p != q) {
-        // The lower cell's facet in FacetVertices order has its right-hand normal pointing
-        // out of that cell in 3D, into it in 2D (counter-clockwise boundary): the bottom
-        // is that order in 3D and its reverse in 2D, so its normal points into phase q.
-        const LocalId* lc = &m.cell_nodes[static_cast<std::size_t>(lower->cell) * K];
+        const std::array<LocalId, Dim> bottom =
+            cohesive_facet_order<Dim>(m, static_cast<std::size_t>(lower->cell), lower->opposite, true);
         const LocalId* uc = &m.cell_nodes[static_cast<std::size_t>(upper->cell) * K];
-        std::array<LocalId, Dim> bottom;
-        for (int k = 0; k < Dim; ++k)
-          bottom[static_cast<std::size_t>(k)] = lc[FacetVertices<Dim>::local[lower->opposite][Dim == 2 ? Dim - 1 - k : k]];
-        for (LocalId b : bottom) out.nodes.push_back(b);
-        for (LocalId b : bottom) {
-          LocalId top = -1;
-          for (int k = 0; k < Dim; ++k) {
-            const LocalId u = uc[FacetVertices<Dim>::local[upper->opposite][k]];
-            if (origin[static_cast<std::size_t>(u)] == origin[static_cast<std::size_t>(b)]) top = u;
+        std::array<LocalId, Dim> top;
+        for (int k = 0; k < Dim; ++k) {
+          const LocalId b = bottom[static_cast<std::size_t>(k)];
+          for (int u_k = 0; u_k < Dim; ++u_k) {
+            const LocalId u = uc[FacetVertices<Dim>::local[upper->opposite][u_k]];
+            if (origin[static_cast<std::size_t>(u)] == origin[static_cast<std::size_t>(b)]) top[static_cast<std::size_t>(k)] = u;
           }
-          out.nodes.push_back(top);
         }
-        out.phase.push_back(p);
-        out.phase.push_back(q);
-        out.partition.push_back(partition);
+        append_cohesive_cell<Dim>(m, bottom, top, p, q, partition);
         ++inserted;
       }
     }
@@ -136,6 +127,46 @@ std::vector<LocalId> insert_cohesive(SimplexMesh<Dim>& m, std::int32_t partition
   return origin;
 }
 
+template <int Dim>
+std::array<LocalId, Dim> cohesive_facet_order(const SimplexMesh<Dim>& m, std::size_t cell, int opposite, bool cell_is_lower) {
+  // FacetVertices order has its right-hand normal out of the cell in 3D and into it in 2D
+  // (a counter-clockwise boundary), so it is reversed for a lower 2D cell and an upper 3D one.
+  const LocalId* c = &m.cell_nodes[cell * (Dim + 1)];
+  const bool reverse = cell_is_lower == (Dim == 2);
+  std::array<LocalId, Dim> out;
+  for (int k = 0; k < Dim; ++k)
+    out[static_cast<std::size_t>(k)] = c[FacetVertices<Dim>::local[opposite][reverse ? Dim - 1 - k : k]];
+  return out;
+}
+
+template <int Dim>
+void append_cohesive_cell(SimplexMesh<Dim>& m, std::array<LocalId, Dim> bottom, std::array<LocalId, Dim> top,
+                          std::int32_t lower_phase, std::int32_t upper_phase, std::int32_t partition) {
+  if constexpr (Dim == 3) {
+    const auto position = [&](LocalId n) {
+      std::array<double, 3> p;
+      for (int d = 0; d < 3; ++d) p[static_cast<std::size_t>(d)] = m.coords[static_cast<std::size_t>(n) * 3 + d] + 0.0;
+      return p;
+    };
+    int first = 0;
+    for (int k = 1; k < 3; ++k)
+      if (position(bottom[static_cast<std::size_t>(k)]) < position(bottom[static_cast<std::size_t>(first)])) first = k;
+    std::rotate(bottom.begin(), bottom.begin() + first, bottom.end());
+    std::rotate(top.begin(), top.begin() + first, top.end());
+  }
+  for (LocalId b : bottom) m.cohesive.nodes.push_back(b);
+  for (LocalId t : top) m.cohesive.nodes.push_back(t);
+  m.cohesive.phase.push_back(lower_phase);
+  m.cohesive.phase.push_back(upper_phase);
+  m.cohesive.partition.push_back(partition);
+}
+
+template std::array<LocalId, 2> cohesive_facet_order<2>(const SimplexMesh<2>&, std::size_t, int, bool);
+template std::array<LocalId, 3> cohesive_facet_order<3>(const SimplexMesh<3>&, std::size_t, int, bool);
+template void append_cohesive_cell<2>(SimplexMesh<2>&, std::array<LocalId, 2>, std::array<LocalId, 2>, std::int32_t,
+                                      std::int32_t, std::int32_t);
+template void append_cohesive_cell<3>(SimplexMesh<3>&, std::array<LocalId, 3>, std::array<LocalId, 3>, std::int32_t,
+                                      std::int32_t, std::int32_t);
 template std::vector<LocalId> insert_cohesive<2>(SimplexMesh<2>&, std::int32_t, CohesiveCounts*);
 template std::vector<LocalId> insert_cohesive<3>(SimplexMesh<3>&, std::int32_t, CohesiveCounts*);
 

@@ -61,4 +61,18 @@ struct CohesiveCounts {
 template <int Dim>
 std::vector<LocalId> insert_cohesive(SimplexMesh<Dim>& m, std::int32_t partition, CohesiveCounts* counts = nullptr);
 
+// The facet opposite local vertex `opposite` of bulk cell `cell`, in an order whose
+// right-hand normal points away from that cell when the cell is the upper side and into it
+// when it is the lower side: the order of a cohesive cell's bottom in that cell's node ids
+// (exact: from the positively oriented cell's vertex order, no floating-point normal).
+template <int Dim>
+std::array<LocalId, Dim> cohesive_facet_order(const SimplexMesh<Dim>& m, std::size_t cell, int opposite, bool cell_is_lower);
+
+// Appends one cohesive cell, t_k over b_k. In 3D the three pairs are rotated so that the
+// bottom node with the smallest coordinates comes first (orientation kept): a cell then
+// reads the same whichever side or partition made it.
+template <int Dim>
+void append_cohesive_cell(SimplexMesh<Dim>& m, std::array<LocalId, Dim> bottom, std::array<LocalId, Dim> top,
+                          std::int32_t lower_phase, std::int32_t upper_phase, std::int32_t partition);
+
 }  // namespace cisamr::mesh

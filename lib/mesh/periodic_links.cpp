@@ -11,7 +11,7 @@ namespace {
 
 template <int Dim>
 struct KeyHash {
-  std::size_t operator()(const std::array<std::uint64_t, Dim>& key) const {
+  std::size_t operator()(const PeriodicKey<Dim>& key) const {
     std::uint64_t h = 0x9e3779b97f4a7c15ull;
     for (std::uint64_t k : key) {  // splitmix64 steps
       h ^= k + 0x9e3779b97f4a7c15ull + (h << 6) + (h >> 2);
@@ -46,7 +46,7 @@ std::string axes_text(std::uint8_t shift) {
 
 template <int Dim>
 PeriodicLinks<Dim> periodic_links(const SimplexMesh<Dim>& m, const Box<Dim>& faces, const std::array<bool, Dim>& axes) {
-  using Key = std::array<std::uint64_t, Dim>;
+  using Key = PeriodicKey<Dim>;
   PeriodicLinks<Dim> links;
   links.axes = axes;
   bool any = false;
@@ -64,7 +64,7 @@ PeriodicLinks<Dim> periodic_links(const SimplexMesh<Dim>& m, const Box<Dim>& fac
       links.slaves.push_back(s);
     }
     if (!on_periodic_min_face<Dim>(p, faces, axes)) continue;
-    const auto [it, inserted] = on_min.emplace(periodic_key<Dim>(p, faces, 0), static_cast<LocalId>(n));
+    const auto [it, inserted] = on_min.emplace(periodic_key<Dim>(p, faces, 0, periodic_phase(m, n)), static_cast<LocalId>(n));
     if (!inserted)
       throw MeshingError("periodic links: " + node_text(m, n) + " and " +
                          node_text(m, static_cast<std::size_t>(it->second)) +
@@ -72,7 +72,7 @@ PeriodicLinks<Dim> periodic_links(const SimplexMesh<Dim>& m, const Box<Dim>& fac
   }
   const auto find = [&](const PeriodicSlave<Dim>& s, std::uint8_t moved) {
     const double* p = &m.coords[static_cast<std::size_t>(s.node) * Dim];
-    const auto it = on_min.find(periodic_key<Dim>(p, faces, moved));
+    const auto it = on_min.find(periodic_key<Dim>(p, faces, moved, periodic_phase(m, static_cast<std::size_t>(s.node))));
     if (it != on_min.end()) return it->second;
     std::string where;
     for (int a = 0; a < Dim; ++a) {

@@ -46,8 +46,8 @@ struct PeriodicLinks {
 
 // The links of `m` for the box whose faces lie at faces.min / faces.max (the exact
 // coordinates of the nodes on the faces: driver::face_box) along the periodic `axes`.
-// A slave without its single-axis or full master, or two nodes on a min face at the same
-// position, throws MeshingError naming the node (global id when the mesh has them, else its
+// With cohesive cells (node_phase set) masters are matched per phase. A slave without its
+// single-axis or full master, or two nodes on a min face at the same position (and phase), throws MeshingError naming the node (global id when the mesh has them, else its
 // index) and its coordinates: the mesh is not periodic. O(n) expected (one hash table of the
 // min-face nodes). Needs the whole mesh: a piece of a parallel run may lack masters
 // (parallel::periodic_masters resolves those).
@@ -67,13 +67,23 @@ std::uint8_t periodic_shift(const double* p, const Box<Dim>& faces, const std::a
     if (axes[static_cast<std::size_t>(a)] && p[a] == faces.max[a]) shift |= static_cast<std::uint8_t>(1u << a);
   return shift;
 }
-// The matching key of the point `p` with the axes of `shift` moved to the min face.
+// The matching key of the point `p` with the axes of `shift` moved to the min face, and the
+// node's phase: with cohesive cells a node's copies share a position, and each copy's
+// master is the copy of its own phase (0 for a mesh without cohesive cells).
 template <int Dim>
-std::array<std::uint64_t, Dim> periodic_key(const double* p, const Box<Dim>& faces, std::uint8_t shift) {
-  std::array<std::uint64_t, Dim> key;
+using PeriodicKey = std::array<std::uint64_t, Dim + 1>;
+template <int Dim>
+PeriodicKey<Dim> periodic_key(const double* p, const Box<Dim>& faces, std::uint8_t shift, std::int32_t phase = 0) {
+  PeriodicKey<Dim> key;
   for (int a = 0; a < Dim; ++a)
     key[static_cast<std::size_t>(a)] = coordinate_bits((shift >> a) & 1 ? faces.min[a] : p[a]);
+  key[Dim] = static_cast<std::uint32_t>(phase);
   return key;
+}
+// A node's phase for its periodic key.
+template <int Dim>
+std::int32_t periodic_phase(const SimplexMesh<Dim>& m, std::size_t node) {
+  return m.node_phase.empty() ? 0 : m.node_phase[node];
 }
 // Whether a node at `p` can be a master: on the min face of some periodic axis.
 template <int Dim>

@@ -66,9 +66,31 @@ std::vector<CanonicalSimplex<Dim>> canonical_simplices(const mesh::SimplexMesh<D
   return out;
 }
 
+// A cohesive cell as its bottom's coordinate bits (3D: rotated to start at the smallest
+// vertex, orientation kept) and its two phases: the same whichever partition emitted it.
+// 0 for a mesh without cohesive cells, so the checksums of bulk meshes are unchanged.
+template <int Dim>
+std::uint64_t cohesive_term(const mesh::SimplexMesh<Dim>& m, std::size_t c) {
+  std::array<std::array<std::uint64_t, Dim>, Dim> bottom;
+  for (int k = 0; k < Dim; ++k) {
+    const auto n = static_cast<std::size_t>(m.cohesive.cell(c)[k]);
+    for (int d = 0; d < Dim; ++d) bottom[static_cast<std::size_t>(k)][static_cast<std::size_t>(d)] = bits(m.coords[Dim * n + d]);
+  }
+  std::size_t first = 0;
+  if constexpr (Dim == 3)
+    for (std::size_t k = 1; k < 3; ++k)
+      if (bottom[k] < bottom[first]) first = k;
+  std::uint64_t h = mix(0xc0e5u ^ mix(static_cast<std::uint64_t>(m.cohesive.phase[2 * c])) ^
+                        static_cast<std::uint64_t>(m.cohesive.phase[2 * c + 1]));
+  for (std::size_t k = 0; k < Dim; ++k)
+    for (std::uint64_t x : bottom[(first + k) % Dim]) h = mix(h ^ x);
+  return h;
+}
+
 template <int Dim>
 std::uint64_t mesh_checksum(const mesh::SimplexMesh<Dim>& m) {
   std::uint64_t sum = 0;
+  for (std::size_t c = 0; c < m.cohesive.count(); ++c) sum += cohesive_term(m, c);
   for (std::size_t c = 0; c < m.cell_count(); ++c) {
     const CanonicalSimplex<Dim> t = canonical(m, c);
     std::uint64_t h = mix(static_cast<std::uint64_t>(t.phase));

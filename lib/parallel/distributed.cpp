@@ -11,6 +11,7 @@
 #include "geometry/oracle.hpp"
 #include "geometry/shapes.hpp"
 #include "io/scene_io.hpp"
+#include "parallel/cohesive.hpp"
 #include "parallel/collective.hpp"
 #include "parallel/exchange.hpp"
 #include "geometry/periodic.hpp"
@@ -422,9 +423,13 @@ DistributedMesh<Dim> mesh_distributed(const Comm& comm, geometry::SceneDesc scen
   });
   out.times.progress = progress;
 
+  if (options.pipeline.cohesive) {
+    ScopedPhase timer(&out.times, "cohesive");
+    join_cohesive<Dim>(comm, outputs, lattice);
+  }
   {
     ScopedPhase timer(&out.times, "merge");
-    out.piece = merge_and_number<Dim>(comm, outputs, lattice);
+    out.piece = merge_and_number<Dim>(comm, outputs, lattice, options.pipeline.cohesive);
   }
   out.global_cells = comm.allreduce_sum(static_cast<std::int64_t>(out.piece.mesh.cell_count()));
 

@@ -4,6 +4,7 @@
 #include <cstring>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 
 #include "grid/key_map.hpp"
 #include "grid/tet_lattice.hpp"
@@ -55,6 +56,32 @@ struct Identities<3> {
   }
 };
 
+// With cohesive cells a node is one copy per phase: the merge key is (identity, phase).
+template <class Id>
+struct SidedKey {
+  Id id;
+  std::int64_t side;  // the copy's phase (64 bits: no padding in the bytes exchanged)
+  auto operator<=>(const SidedKey&) const = default;
+};
+std::uint64_t hash_of(const SidedKey<std::uint64_t>& key) { return mix(hash_of(key.id) ^ static_cast<std::uint64_t>(key.side)); }
+std::uint64_t hash_of(const SidedKey<std::array<std::uint64_t, 2>>& key) {
+  return mix(hash_of(key.id) ^ static_cast<std::uint64_t>(key.side));
+}
+inline std::uint64_t identity_part(std::uint64_t k) { return k; }
+inline const std::array<std::uint64_t, 2>& identity_part(const std::array<std::uint64_t, 2>& k) { return k; }
+template <class Id>
+const Id& identity_part(const SidedKey<Id>& k) { return k.id; }
+inline std::int32_t side_of(std::uint64_t) { return 0; }
+inline std::int32_t side_of(const std::array<std::uint64_t, 2>&) { return 0; }
+template <class Id>
+std::int32_t side_of(const SidedKey<Id>& k) { return static_cast<std::int32_t>(k.side); }
+template <int Dim, class Key>
+std::string key_name(const Key& key) {
+  std::string text = Identities<Dim>::name(identity_part(key));
+  if constexpr (!std::is_same_v<Key, typename Identities<Dim>::Key>) text += " (phase " + std::to_string(key.side) + " copy)";
+  return text;
+}
+
 struct IdentityHash {
   template <class Key>
   std::uint64_t operator()(const Key& key) const { return hash_of(key); }
@@ -73,11 +100,11 @@ struct Claim {  // one rank's claim on a face identity, as the rendezvous rank s
 }  // namespace merge_detail
 using namespace merge_detail;
 
-template <int Dim>
-NumberedPiece<Dim> merge_and_number(const Comm& comm, std::vector<PartitionOutput<Dim>>& parts,
-                                    const grid::Lattice<Dim>& lattice) {
+template <int Dim, class Key>
+NumberedPiece<Dim> merge_keys(const Comm& comm, std::vector<PartitionOutput<Dim>>& parts,
+                              const grid::Lattice<Dim>& lattice) {
   using Id = Identities<Dim>;
-  using Key = typename Id::Key;
+  constexpr bool kSided = !std::is_same_v<Key, typename Id::Key>;
   constexpr int kCorners = Dim + 1;
   const int size = comm.size();
   const auto home_rank = [size](const Key& key) {
@@ -107,9 +134,15 @@ NumberedPiece<Dim> merge_and_number(const Comm& comm, std::vector<PartitionOutpu
         return false;
       };
       std::vector<std::int32_t> local(m.node_count());
+      if (kSided && m.node_phase.size() != m.node_count())
+        throw std::logic_error("merge: a cohesive partition without node phases");
       for (std::size_t n = 0; n < m.node_count(); ++n) {
-        const Key key = part.result.node_identity[n];
-        const bool unshared = key == pipeline::Result<Dim>::kUnshared;
+        Key key;
+        if constexpr (kSided)
+          key = {part.result.node_identity[n], m.node_phase[n]};
+        else
+          key = part.result.node_identity[n];
+        const bool unshared = identity_part(key) == pipeline::Result<Dim>::kUnshared;
         const auto next = static_cast<std::int32_t>(keys.size());
         bool inserted = true;
         const std::int32_t id = unshared ? next : by_key.insert(key, next, inserted);
@@ -119,7 +152,7 @@ NumberedPiece<Dim> merge_and_number(const Comm& comm, std::vector<PartitionOutpu
             if (!same_bits(coords[Dim * static_cast<std::size_t>(id) + d], m.coords[Dim * n + d]))
               throw std::logic_error(
                   "partitions " + std::to_string(parts[static_cast<std::size_t>(first_part[static_cast<std::size_t>(id)])].partition) +
-                  " and " + std::to_string(part.partition) + " place " + Id::name(key) + " differently");
+                  " and " + std::to_string(part.partition) + " place " + key_name<Dim>(key) + " differently");
         } else {
           keys.push_back(key);
           for (int d = 0; d < Dim; ++d) coords.push_back(m.coords[Dim * n + d]);
@@ -128,7 +161,7 @@ NumberedPiece<Dim> merge_and_number(const Comm& comm, std::vector<PartitionOutpu
         }
         if (!unshared) {
           bool face = true;
-          for (std::uint64_t k : Id::lattice_keys(key)) face = face && on_inner_face(k);
+          for (std::uint64_t k : Id::lattice_keys(identity_part(key))) face = face && on_inner_face(k);
           if (face) on_face[static_cast<std::size_t>(id)] = 1;
         }
       }
@@ -138,6 +171,10 @@ NumberedPiece<Dim> merge_and_number(const Comm& comm, std::vector<PartitionOutpu
         cells.cell_phase.push_back(m.cell_phase[c]);
         cells.cell_partition.push_back(part.partition);
       }
+      for (LocalId n : m.cohesive.nodes) cells.cohesive.nodes.push_back(local[static_cast<std::size_t>(n)]);
+      cells.cohesive.phase.insert(cells.cohesive.phase.end(), m.cohesive.phase.begin(), m.cohesive.phase.end());
+      cells.cohesive.partition.insert(cells.cohesive.partition.end(), m.cohesive.partition.begin(),
+                                      m.cohesive.partition.end());
       part.result = pipeline::Result<Dim>{};  // release the partition's copy early
     }
   });
@@ -213,16 +250,20 @@ NumberedPiece<Dim> merge_and_number(const Comm& comm, std::vector<PartitionOutpu
   m.coords.resize(Dim * node_count);
   m.node_global_id.assign(node_count, -1);
   piece.node_key.resize(node_count);
+  if (kSided) m.node_phase.resize(node_count);
   for (std::size_t n = 0; n < node_count; ++n) {
     const auto id = static_cast<std::size_t>(new_id[n]);
     for (int d = 0; d < Dim; ++d) m.coords[Dim * id + d] = coords[Dim * n + d];
-    piece.node_key[id] = keys[n];
+    piece.node_key[id] = identity_part(keys[n]);
+    if (kSided) m.node_phase[id] = side_of(keys[n]);
     if (owned[n]) m.node_global_id[id] = offset + static_cast<std::int64_t>(id);
   }
   m.cell_nodes = std::move(cells.cell_nodes);
   for (auto& v : m.cell_nodes) v = new_id[static_cast<std::size_t>(v)];
   m.cell_phase = std::move(cells.cell_phase);
   m.cell_partition = std::move(cells.cell_partition);
+  m.cohesive = std::move(cells.cohesive);
+  for (auto& v : m.cohesive.nodes) v = new_id[static_cast<std::size_t>(v)];
 
   // 5. Owners send the global ids of face nodes to the rendezvous, which forwards them.
   std::vector<Packer> ids(static_cast<std::size_t>(size));
@@ -271,6 +312,13 @@ NumberedPiece<Dim> merge_and_number(const Comm& comm, std::vector<PartitionOutpu
 }
 
 template <int Dim>
+NumberedPiece<Dim> merge_and_number(const Comm& comm, std::vector<PartitionOutput<Dim>>& parts,
+                                    const grid::Lattice<Dim>& lattice, bool cohesive) {
+  using Id = typename Identities<Dim>::Key;
+  return cohesive ? merge_keys<Dim, SidedKey<Id>>(comm, parts, lattice) : merge_keys<Dim, Id>(comm, parts, lattice);
+}
+
+template <int Dim>
 mesh::SimplexMesh<Dim> gather_mesh(const Comm& comm, const NumberedPiece<Dim>& piece, int root) {
   const auto& m = piece.mesh;
   Packer p;
@@ -282,6 +330,13 @@ mesh::SimplexMesh<Dim> gather_mesh(const Comm& comm, const NumberedPiece<Dim>& p
   p.put_vector(cell_gids);
   p.put_vector(m.cell_phase);
   p.put_vector(m.cell_partition);
+  std::vector<GlobalId> cohesive_gids(m.cohesive.nodes.size());
+  for (std::size_t i = 0; i < cohesive_gids.size(); ++i)
+    cohesive_gids[i] = m.node_global_id[static_cast<std::size_t>(m.cohesive.nodes[i])];
+  p.put_vector(cohesive_gids);
+  p.put_vector(m.cohesive.phase);
+  p.put_vector(m.cohesive.partition);
+  p.put_vector(m.node_phase);
   const std::vector<Bytes> all = gather_bytes(comm, p.take(), root);
   mesh::SimplexMesh<Dim> out;
   run_collectively(comm, [&] {
@@ -296,6 +351,18 @@ mesh::SimplexMesh<Dim> gather_mesh(const Comm& comm, const NumberedPiece<Dim>& p
       const auto cg = u.get_vector<GlobalId>();
       const auto phase = u.get_vector<std::int32_t>();
       const auto partition = u.get_vector<std::int32_t>();
+      const auto cohesive_gids = u.get_vector<GlobalId>();
+      const auto cohesive_phase = u.get_vector<std::int32_t>();
+      const auto cohesive_partition = u.get_vector<std::int32_t>();
+      const auto node_phase = u.get_vector<std::int32_t>();
+      if (!node_phase.empty()) {
+        if (out.node_phase.empty()) out.node_phase.assign(n, 0);
+        for (std::size_t i = 0; i < gids.size() && i < node_phase.size(); ++i)
+          if (static_cast<std::size_t>(gids[i]) < n) out.node_phase[static_cast<std::size_t>(gids[i])] = node_phase[i];
+      }
+      for (GlobalId g : cohesive_gids) out.cohesive.nodes.push_back(static_cast<LocalId>(g));
+      out.cohesive.phase.insert(out.cohesive.phase.end(), cohesive_phase.begin(), cohesive_phase.end());
+      out.cohesive.partition.insert(out.cohesive.partition.end(), cohesive_partition.begin(), cohesive_partition.end());
       for (std::size_t i = 0; i < gids.size(); ++i) {
         const auto g = static_cast<std::size_t>(gids[i]);
         if (g >= n) throw std::logic_error("gather: global id out of range");
@@ -317,8 +384,8 @@ mesh::SimplexMesh<Dim> gather_mesh(const Comm& comm, const NumberedPiece<Dim>& p
   return out;
 }
 
-template NumberedPiece<2> merge_and_number<2>(const Comm&, std::vector<PartitionOutput<2>>&, const grid::Lattice<2>&);
-template NumberedPiece<3> merge_and_number<3>(const Comm&, std::vector<PartitionOutput<3>>&, const grid::Lattice<3>&);
+template NumberedPiece<2> merge_and_number<2>(const Comm&, std::vector<PartitionOutput<2>>&, const grid::Lattice<2>&, bool);
+template NumberedPiece<3> merge_and_number<3>(const Comm&, std::vector<PartitionOutput<3>>&, const grid::Lattice<3>&, bool);
 template mesh::SimplexMesh<2> gather_mesh<2>(const Comm&, const NumberedPiece<2>&, int);
 template mesh::SimplexMesh<3> gather_mesh<3>(const Comm&, const NumberedPiece<3>&, int);
 

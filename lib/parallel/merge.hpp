@@ -54,10 +54,12 @@ using NumberedPiece3 = NumberedPiece<3>;
 // are exchanged with a rendezvous rank (hash of the identity), so corners shared by boxes
 // that touch only diagonally need no special case. Throws std::logic_error (a bug, not bad
 // input) when two partitions give the same identity different coordinates. Empties the
-// kernel results as it goes.
+// kernel results as it goes. `cohesive` (the same on every rank): the partitions' nodes are
+// copies named (identity, node_phase), merged by that pair; their cohesive cells are carried
+// and node_phase is set.
 template <int Dim>
 NumberedPiece<Dim> merge_and_number(const Comm& comm, std::vector<PartitionOutput<Dim>>& parts,
-                                    const grid::Lattice<Dim>& lattice);
+                                    const grid::Lattice<Dim>& lattice, bool cohesive = false);
 inline NumberedPiece2 merge_and_number2(const Comm& comm, std::vector<PartitionOutput2>& parts,
                                         const grid::Lattice2& lattice) {
   return merge_and_number<2>(comm, parts, lattice);

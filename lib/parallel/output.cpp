@@ -49,7 +49,7 @@ void write_pvtu(const Comm& comm, const std::string& pvtu_path, const mesh::Simp
     io::AtomicFile file(pvtu_path);
     std::vector<std::string> pieces;
     for (int r = 0; r < comm.size(); ++r) pieces.push_back(fs::path(piece_path(pvtu_path, r)).filename().string());
-    file.write(io::pvtu_text(pieces, options.any_periodic()));
+    file.write(io::pvtu_text(pieces, options.any_periodic(), !piece.node_phase.empty()));
     file.commit();
   });
   run_collectively(comm, [&] { outputs.commit(); });

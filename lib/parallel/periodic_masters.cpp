@@ -22,7 +22,7 @@ std::uint64_t mix(std::uint64_t x) {  // splitmix64 finaliser
 
 template <int Dim>
 struct KeyHash {
-  std::size_t operator()(const std::array<std::uint64_t, Dim>& key) const {
+  std::size_t operator()(const mesh::PeriodicKey<Dim>& key) const {
     std::uint64_t h = 0;
     for (std::uint64_t k : key) h = mix(h ^ k);
     return static_cast<std::size_t>(h);
@@ -46,7 +46,7 @@ using namespace periodic_detail;
 template <int Dim>
 std::vector<GlobalId> periodic_masters(const Comm& comm, const mesh::SimplexMesh<Dim>& piece, const Box<Dim>& faces,
                                        const std::array<bool, Dim>& axes) {
-  using Key = std::array<std::uint64_t, Dim>;
+  using Key = mesh::PeriodicKey<Dim>;
   const int size = comm.size();
   const std::size_t nodes = piece.node_count();
   const auto home = [&](const Key& key) {
@@ -64,12 +64,12 @@ std::vector<GlobalId> periodic_masters(const Comm& comm, const mesh::SimplexMesh
     const double* p = &piece.coords[n * Dim];
     const std::uint8_t shift = mesh::periodic_shift<Dim>(p, faces, axes);
     if (shift != 0) {
-      const Key key = mesh::periodic_key<Dim>(p, faces, shift);
+      const Key key = mesh::periodic_key<Dim>(p, faces, shift, mesh::periodic_phase(piece, n));
       const std::size_t r = home(key);
       requests[r].put(key);
       asked[r].push_back(n);
     } else if (mesh::on_periodic_min_face<Dim>(p, faces, axes)) {
-      const Key key = mesh::periodic_key<Dim>(p, faces, 0);
+      const Key key = mesh::periodic_key<Dim>(p, faces, 0, mesh::periodic_phase(piece, n));
       const std::size_t r = home(key);
       candidates[r].put(key);
       candidates[r].put<std::int64_t>(gid(n));

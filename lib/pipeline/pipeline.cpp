@@ -5,8 +5,8 @@
 
 #include "core/error.hpp"
 #include "grid/tet_lattice.hpp"
-#include "mesh/cohesive.hpp"
 #include "pipeline/assembly.hpp"
+#include "pipeline/cohesive.hpp"
 #include "pipeline/effective_levels.hpp"
 
 namespace cisamr::pipeline {
@@ -152,17 +152,12 @@ Result<Dim> run(const geometry::Oracle<Dim>& oracle, const grid::Lattice<Dim>& l
 
 namespace {
 
-// The whole mesh's cohesive cells, its split nodes keeping their original's identity.
+// The whole mesh's cohesive cells (pipeline/cohesive.hpp), the domain as one partition.
 template <int Dim>
-Result<Dim> with_cohesive(const geometry::SceneDesc& scene, Result<Dim> result, const Options& options) {
+Result<Dim> with_cohesive(Result<Dim> result, const grid::Lattice<Dim>& lattice, const Options& options) {
   if (!options.cohesive) return result;
-  if (scene.any_periodic())
-    throw InputError(scene.source, "domain.periodic", "cohesive cells in a periodic scene are not supported yet");
   ScopedPhase timer(&result.times, "cohesive");
-  const std::vector<LocalId> origin = mesh::insert_cohesive(result.mesh, 0);
-  result.node_identity.resize(origin.size());
-  for (std::size_t n = 0; n < origin.size(); ++n)
-    result.node_identity[n] = result.node_identity[static_cast<std::size_t>(origin[n])];
+  insert_cohesive_whole(result, lattice);
   return result;
 }
 
@@ -172,7 +167,7 @@ Result<2> mesh(const geometry::Oracle2& oracle, const Options& options) {
   const grid::Lattice2 lattice = make_lattice<2>(oracle.scene(), options);
   begin_phase(options.progress, "levels");
   const std::vector<int> levels = effective_levels2(oracle.scene(), lattice);
-  return with_cohesive(oracle.scene(), run(oracle, lattice, lattice.whole_domain(), 0, options, 0, levels), options);
+  return with_cohesive(run(oracle, lattice, lattice.whole_domain(), 0, options, 0, levels), lattice, options);
 }
 
 Result<3> mesh(const geometry::Oracle3& oracle, const Options& options) {
@@ -180,7 +175,7 @@ Result<3> mesh(const geometry::Oracle3& oracle, const Options& options) {
   begin_phase(options.progress, "levels");
   const std::vector<int> levels =
       effective_levels3(oracle.scene(), lattice, {}, surface_unions(oracle.scene()));
-  return with_cohesive(oracle.scene(), run(oracle, lattice, lattice.whole_domain(), 0, options, 0, levels), options);
+  return with_cohesive(run(oracle, lattice, lattice.whole_domain(), 0, options, 0, levels), lattice, options);
 }
 
 template grid::Lattice<2> make_lattice<2>(const geometry::SceneDesc&, const Options&);
