@@ -114,6 +114,23 @@ struct LoadedMesh {
   std::vector<PeriodicLink> periodic_links;
   // .vtu / .pvtu: the point data periodic_master (per node, the full master's global id or -1).
   std::vector<GlobalId> periodic_master;
+  // Cohesive cells (docs/cohesive-design.md §6.1) are in mesh2/mesh3.cohesive, in the internal
+  // node order, with the phases the file claims for them (0 where it says nothing), and
+  // node_phase as the file gives it (.vtu) or else each node's first bulk cell's phase.
+  // Their element sets as the file names them (.msh physical groups COH_*, .inp ELSETs of
+  // COH2D4/COH3D6 blocks and *ELSETs named COH_*); a .vtu names none.
+  struct CohesiveSet {
+    std::string name;
+    // The phase pairs (lower id, upper id) the name denotes: COH_<A>_<B> with A, B the two
+    // phases' names as the writers label them, or COH_<p>_<q> with their ids. Usually one.
+    std::vector<std::array<std::int32_t, 2>> named_pairs;
+  };
+  std::vector<CohesiveSet> cohesive_sets;
+  // Per cohesive cell: its index in cohesive_sets, or one of the two values below. Empty when
+  // the format names no sets.
+  std::vector<std::int32_t> cohesive_set_of_cell;
+  static constexpr std::int32_t kNoCohesiveSet = -1;
+  static constexpr std::int32_t kSeveralCohesiveSets = -2;
 };
 
 // Reads what cisamr and other tools write (lib/io/README.md, "Reading meshes"):
@@ -125,7 +142,10 @@ struct LoadedMesh {
 //   .mesh  Medit ASCII;  .inp  Abaqus (several element blocks, *ELSET);
 //   .node/.ele  TetGen (or Triangle): the two files of the named stem
 // Triangles or tetrahedra only: points and lines (and boundary triangles of a tetrahedral
-// mesh) are skipped, any other element type is an InputError. The mesh is 2D when its
+// mesh) are skipped, any other element type is an InputError, except the cohesive cells a
+// file marks as such: quads (2D) or wedges/prisms (3D) with cell data cohesive = 1 (.vtu,
+// .pvtu, .vtk), in a physical group named COH_* (.msh), of type COH2D4/COH3D6 (.inp). A
+// .pvtu with cohesive cells needs global_id (merging by coordinates would weld the copies). The mesh is 2D when its
 // cells are triangles and every z is 0. Phases come from the phase array (or gmsh:physical,
 // medit:ref) / physical tags / references / ELSETs / region attributes (1 when absent);
 // absent global ids are the node index, absent partitions 0. Every problem is an

@@ -27,6 +27,49 @@ void fill_mesh(RawMesh& raw, mesh::SimplexMesh<Dim>& m) {
     m.node_global_id.resize(nodes);
     for (std::size_t n = 0; n < nodes; ++n) m.node_global_id[n] = static_cast<GlobalId>(n);
   }
+  if (raw.cohesive_nodes.empty()) return;
+  const std::size_t cohesive = raw.cohesive_nodes.size() / (2 * Dim);
+  m.cohesive.nodes = std::move(raw.cohesive_nodes);
+  m.cohesive.phase = std::move(raw.cohesive_phase);
+  m.cohesive.partition = std::move(raw.cohesive_partition);
+  if (m.cohesive.partition.empty()) m.cohesive.partition.assign(cohesive, 0);
+  m.node_phase = std::move(raw.node_phase);
+  if (m.node_phase.empty()) {  // not in the file: each node's first bulk cell's phase
+    m.node_phase.assign(nodes, 0);
+    std::vector<bool> seen(nodes, false);
+    for (std::size_t i = 0; i < m.cell_nodes.size(); ++i) {
+      const auto n = static_cast<std::size_t>(m.cell_nodes[i]);
+      if (!seen[n]) seen[n] = true, m.node_phase[n] = m.cell_phase[i / (Dim + 1)];
+    }
+  }
+}
+
+// The cohesive cells' checks: their kind matches the bulk cells', node indices in range,
+// one entry per cell in every per-cell array.
+void check_cohesive_arrays(const RawMesh& raw, std::size_t nodes, const std::string& path) {
+  if (raw.cohesive_nodes.empty()) {
+    if (!raw.node_phase.empty() && raw.node_phase.size() != nodes)
+      throw InputError(path, "node_phase", "has " + std::to_string(raw.node_phase.size()) + " values for " +
+                                               std::to_string(nodes) + " points");
+    return;
+  }
+  const int wanted = raw.corners == 4 ? 6 : 4;
+  if (raw.cohesive_corners != wanted)
+    throw InputError(path, "", raw.cohesive_corners == 6 ? "cohesive prisms (wedges) in a triangle mesh: they go with tetrahedra"
+                                                         : "cohesive quads in a tetrahedral mesh: they go with triangles");
+  const std::size_t corners = static_cast<std::size_t>(wanted);
+  if (raw.cohesive_nodes.size() % corners != 0) throw InputError(path, "", "cohesive cells with missing nodes");
+  const std::size_t cells = raw.cohesive_nodes.size() / corners;
+  for (std::size_t i = 0; i < raw.cohesive_nodes.size(); ++i)
+    if (raw.cohesive_nodes[i] < 0 || static_cast<std::size_t>(raw.cohesive_nodes[i]) >= nodes)
+      throw InputError(path, "", "cohesive cell " + std::to_string(i / corners) + " refers to node " +
+                                     std::to_string(raw.cohesive_nodes[i]) + " of " + std::to_string(nodes));
+  if (raw.cohesive_phase.size() != 2 * cells || (!raw.cohesive_partition.empty() && raw.cohesive_partition.size() != cells) ||
+      (!raw.cohesive_set_of_cell.empty() && raw.cohesive_set_of_cell.size() != cells))
+    throw InputError(path, "", "cohesive cell data do not match the number of cohesive cells");
+  if (!raw.node_phase.empty() && raw.node_phase.size() != nodes)
+    throw InputError(path, "node_phase", "has " + std::to_string(raw.node_phase.size()) + " values for " +
+                                             std::to_string(nodes) + " points");
 }
 
 }  // namespace
@@ -47,6 +90,7 @@ LoadedMesh finish(RawMesh raw, const std::string& path) {
     throw InputError(path, "", "cell data do not match the number of cells");
   if (!raw.node_global_id.empty() && raw.node_global_id.size() != nodes)
     throw InputError(path, "", "point data do not match the number of points");
+  check_cohesive_arrays(raw, nodes, path);
 
   LoadedMesh result;
   bool flat = true;
@@ -80,6 +124,10 @@ LoadedMesh finish(RawMesh raw, const std::string& path) {
                                                   std::to_string(nodes) + " points");
   result.periodic_links = std::move(raw.periodic_links);
   result.periodic_master = std::move(raw.periodic_master);
+  if (!raw.cohesive_nodes.empty()) {
+    result.cohesive_sets = std::move(raw.cohesive_sets);
+    result.cohesive_set_of_cell = std::move(raw.cohesive_set_of_cell);
+  }
   if (result.dimension == 2)
     fill_mesh(raw, result.mesh2);
   else

@@ -29,6 +29,16 @@ struct ElementSets {
   struct Range { int set; long long first, last, step; };
   std::vector<Range> ranges;                // GENERATE lines
   std::map<int, std::pair<int, std::string>> announced;  // set → (id, name) from "** cisamr phase"
+  // Cohesive sets: the ELSETs of COH2D4/COH3D6 blocks and the *ELSETs named COH_*, with
+  // the ids those *ELSETs list (a cell may be in its block's set and in such a listing).
+  std::vector<bool> cohesive;  // per set
+  std::vector<std::pair<long long, int>> cohesive_listings;  // (element id, set)
+
+  void mark_cohesive(int set) {
+    if (cohesive.size() <= static_cast<std::size_t>(set)) cohesive.resize(static_cast<std::size_t>(set) + 1, false);
+    cohesive[static_cast<std::size_t>(set)] = true;
+  }
+  bool is_cohesive(int set) const { return static_cast<std::size_t>(set) < cohesive.size() && cohesive[static_cast<std::size_t>(set)]; }
 
   int add(const std::string& name) {
     const auto [it, inserted] = index.emplace(upper(name), static_cast<int>(names.size()));
@@ -50,6 +60,42 @@ struct ElementSets {
   }
 };
 
+// The cohesive cells' sets and phases, once the phases have their ids: each cell's sets
+// are its block's ELSET and every COH_* *ELSET listing it; its phases are what the
+// "** cisamr cohesive P Q NAME" comment before its block claims, else the one pair its one
+// set's name denotes.
+void resolve_cohesive_sets(RawMesh& raw, TaggedCells& cells, const ElementSets& sets) {
+  const std::map<int, std::string> phases = cells.used_phase_names(raw.phase_names);
+  std::vector<std::int32_t> final_set(sets.names.size(), LoadedMesh::kNoCohesiveSet);
+  for (std::size_t k = 0; k < sets.names.size(); ++k)
+    if (sets.is_cohesive(static_cast<int>(k))) {
+      final_set[k] = static_cast<std::int32_t>(raw.cohesive_sets.size());
+      raw.cohesive_sets.push_back({sets.names[k], cohesive_pairs_named(sets.names[k], phases)});
+    }
+  std::unordered_multimap<long long, int> listed(sets.cohesive_listings.begin(), sets.cohesive_listings.end());
+  std::vector<int> in;  // the cell's sets
+  for (TaggedCells::CohesiveCell& c : cells.cohesive) {
+    in.clear();
+    if (c.set >= 0) in.push_back(c.set);
+    const auto [first, last] = listed.equal_range(c.tag);
+    for (auto it = first; it != last; ++it) in.push_back(it->second);
+    for (const ElementSets::Range& r : sets.ranges)
+      if (sets.is_cohesive(r.set) && c.tag >= r.first && c.tag <= r.last &&
+          (static_cast<unsigned long long>(c.tag) - static_cast<unsigned long long>(r.first)) %
+                  static_cast<unsigned long long>(r.step) == 0)
+        in.push_back(r.set);
+    std::sort(in.begin(), in.end());
+    in.erase(std::unique(in.begin(), in.end()), in.end());
+    c.set = in.empty() ? LoadedMesh::kNoCohesiveSet : final_set[static_cast<std::size_t>(in.front())];
+    c.several_sets = in.size() > 1;
+    const bool claimed = c.phases[0] != 0 || c.phases[1] != 0;
+    if (!claimed && in.size() == 1) {
+      const auto& pairs = raw.cohesive_sets[static_cast<std::size_t>(c.set)].named_pairs;
+      if (pairs.size() == 1) c.phases = pairs.front();
+    }
+  }
+}
+
 }  // namespace
 
 // An element's phase is the ELSET= of its *ELEMENT block, or when that has none, the first
@@ -57,7 +103,8 @@ struct ElementSets {
 // "** cisamr phase ID NAME" comment gives one. *NSET, *SURFACE, materials, steps etc. are
 // ignored; *INCLUDE is refused (the included file would hold part of the mesh). The nodes
 // our writer lists in a "** cisamr periodic reference nodes ID..." comment (REF_X ... of a
-// periodic mesh, in no element) are dropped; *EQUATION constraints are ignored.
+// periodic mesh, in no element) are dropped; *EQUATION constraints are ignored. COH2D4 and
+// COH3D6 elements are the cohesive cells (resolve_cohesive_sets).
 LoadedMesh read_inp(const std::string& path) {
   const MappedFile file(path);
   const std::string_view text = file.view();
@@ -67,7 +114,10 @@ LoadedMesh read_inp(const std::string& path) {
   std::vector<int> cell_block_set;  // per cell (file order of triangles, then tetrahedra): -1 none
   ElementSets sets;
   std::optional<std::pair<int, std::string>> announced;  // from "** cisamr phase ID NAME"
-  enum class Block { none, nodes, triangles, tetrahedra, elset } block = Block::none;
+  std::optional<std::array<std::int32_t, 2>> announced_cohesive;  // from "** cisamr cohesive P Q NAME"
+  std::array<std::int32_t, 2> block_cohesive_phases{};
+  int block_cohesive_corners = 0;
+  enum class Block { none, nodes, triangles, tetrahedra, cohesive, elset } block = Block::none;
   int block_set = -1;
   bool generate = false;
   // Our writer's periodic REF nodes (ids announced by a comment) belong to no element: dropped.
@@ -99,6 +149,14 @@ LoadedMesh read_inp(const std::string& path) {
   static const char* const kTriangleTypes[] = {"CPS3", "CPE3", "CPE3H", "CAX3", "CAX3H", "DC2D3", "CPS3T",
                                                "CPE3T", "S3", "S3R", "R3D3", "M3D3", "STRI3", "DS3"};
   static const char* const kTetTypes[] = {"C3D4", "C3D4H", "C3D4T", "DC3D4"};
+  // Cohesive elements (mesh::CohesiveOrder): the only quads and prisms read.
+  const auto cohesive_corners = [](const std::string& type) { return type == "COH2D4" ? 4 : type == "COH3D6" ? 6 : 0; };
+  const auto phase_id = [&](std::string_view field) {
+    const long long id = parse_int(field);
+    if (id < std::numeric_limits<std::int32_t>::min() || id > std::numeric_limits<std::int32_t>::max())
+      fail("phase id " + std::to_string(id) + " is out of range");
+    return static_cast<std::int32_t>(id);
+  };
 
   while (pos < text.size()) {
     const std::size_t end = std::min(text.find('\n', pos), text.size());
@@ -108,7 +166,17 @@ LoadedMesh read_inp(const std::string& path) {
     if (line.empty()) continue;
     if (line.substr(0, 2) == "**") {
       constexpr std::string_view kMarker = "** cisamr phase ";
+      constexpr std::string_view kCohesiveMarker = "** cisamr cohesive ";
       constexpr std::string_view kReference = "** cisamr periodic reference nodes";
+      if (line.substr(0, kCohesiveMarker.size()) == kCohesiveMarker) {
+        const std::string_view rest = trim(line.substr(kCohesiveMarker.size()));
+        const std::size_t space = rest.find(' ');
+        if (space == std::string_view::npos) fail("'** cisamr cohesive' needs two phase ids");
+        const std::string_view after = trim(rest.substr(space));
+        const std::int32_t lower = phase_id(rest.substr(0, space));
+        announced_cohesive = std::array<std::int32_t, 2>{lower, phase_id(after.substr(0, after.find(' ')))};
+        continue;
+      }
       if (line.substr(0, kReference.size()) == kReference) {
         std::string_view rest = line.substr(kReference.size());
         while (!(rest = trim(rest)).empty()) {
@@ -150,17 +218,26 @@ LoadedMesh read_inp(const std::string& path) {
           block = Block::triangles;
         else if (std::find(std::begin(kTetTypes), std::end(kTetTypes), type) != std::end(kTetTypes))
           block = Block::tetrahedra;
+        else if ((block_cohesive_corners = cohesive_corners(type)) != 0)
+          block = Block::cohesive;
         else
           fail("unsupported element type '" + params["TYPE"] + "': only triangles and tetrahedra are read");
         const std::string elset = params["ELSET"];
         block_set = elset.empty() ? -1 : sets.add(elset);
-        if (announced && block_set >= 0) sets.announced.emplace(block_set, *announced);
+        if (block == Block::cohesive) {
+          if (block_set >= 0) sets.mark_cohesive(block_set);
+          block_cohesive_phases = announced_cohesive.value_or(std::array<std::int32_t, 2>{0, 0});
+        } else if (announced && block_set >= 0) {
+          sets.announced.emplace(block_set, *announced);
+        }
         announced.reset();
+        announced_cohesive.reset();
       } else if (keyword == "ELSET") {
         const std::string elset = params["ELSET"];
         if (elset.empty()) fail("*ELSET without ELSET=");
         block = Block::elset;
         block_set = sets.add(elset);
+        if (names_cohesive_set(elset)) sets.mark_cohesive(block_set);
         generate = params.count("GENERATE") > 0;
       }
       continue;
@@ -185,6 +262,7 @@ LoadedMesh read_inp(const std::string& path) {
           const auto r = std::from_chars(field.data(), field.data() + field.size(), id);
           if (r.ec == std::errc() && r.ptr == field.data() + field.size()) {
             sets.first_listing.emplace(id, block_set);
+            if (sets.is_cohesive(block_set)) sets.cohesive_listings.emplace_back(id, block_set);
           } else {
             const auto named = sets.index.find(upper(field));
             if (named == sets.index.end() || named->second == block_set)
@@ -193,6 +271,14 @@ LoadedMesh read_inp(const std::string& path) {
           }
         }
       }
+    } else if (block == Block::cohesive) {
+      const auto n = static_cast<std::size_t>(block_cohesive_corners);
+      if (fields.size() != n + 1) fail("an element line needs an id and " + std::to_string(n) + " nodes");
+      std::array<long long, 6> file_nodes{};
+      for (std::size_t k = 0; k < n; ++k) file_nodes[k] = parse_int(fields[k + 1]);
+      TaggedCells::CohesiveCell c{parse_int(fields[0]), block_set, false, block_cohesive_phases, block_cohesive_corners, {}};
+      cohesive_to_internal(c.corners, CohesiveFileOrder::abaqus, file_nodes.data(), c.nodes.data());
+      cells.cohesive.push_back(c);
     } else {
       const std::size_t n = block == Block::triangles ? 3 : 4;
       if (fields.size() != n + 1)
@@ -251,6 +337,7 @@ LoadedMesh read_inp(const std::string& path) {
     node_tags.resize(kept_nodes);
     raw.coords.resize(3 * kept_nodes);
   }
+  if (!cells.cohesive.empty()) resolve_cohesive_sets(raw, cells, sets);
   const TagMap map = sort_nodes_by_tag(raw, node_tags, path);
   cells.finish(raw, map, path);
   return finish(std::move(raw), path);

@@ -24,6 +24,7 @@
 
 #include "core/error.hpp"
 #include "io/mesh_io.hpp"
+#include "mesh/cohesive.hpp"
 
 namespace cisamr::io::detail {
 
@@ -90,7 +91,64 @@ struct RawMesh {
   std::map<int, std::string> phase_names;   // from the file, when it has them
   std::vector<LoadedMesh::PeriodicLink> periodic_links;  // .msh $Periodic (node indices)
   std::vector<GlobalId> periodic_master;     // .vtu point data; empty = absent
+  // Cohesive cells (cohesive_to_internal): 0-based, in the internal order b0.. t0..
+  int cohesive_corners = 0;                  // 4 (quads, 2D) or 6 (wedges, 3D); 0 = none
+  std::vector<LocalId> cohesive_nodes;
+  std::vector<std::int32_t> cohesive_phase;      // 2 per cell: as the file claims, 0 = unsaid
+  std::vector<std::int32_t> cohesive_partition;  // empty = all 0
+  std::vector<LoadedMesh::CohesiveSet> cohesive_sets;
+  std::vector<std::int32_t> cohesive_set_of_cell;  // empty = the format names no sets
+  std::vector<std::int32_t> node_phase;          // .vtu point data; empty = absent
 };
+
+// Which format's cohesive node order a file uses (mesh::CohesiveOrder).
+enum class CohesiveFileOrder { vtk, gmsh, abaqus };
+
+// A cohesive cell's nodes from the file's order to the internal one: position i of the
+// file's element holds internal node order[i] (mesh/cohesive.hpp), so internal[order[i]] =
+// file[i]. `corners` is 4 or 6.
+template <class T>
+void cohesive_to_internal(int corners, CohesiveFileOrder format, const T* file, T* internal) {
+  const auto apply = [&](const auto& order) {
+    for (std::size_t i = 0; i < order.size(); ++i) internal[order[i]] = file[i];
+  };
+  using O2 = mesh::CohesiveOrder<2>;
+  using O3 = mesh::CohesiveOrder<3>;
+  if (corners == 4) apply(format == CohesiveFileOrder::vtk ? O2::vtk : format == CohesiveFileOrder::gmsh ? O2::gmsh : O2::abaqus);
+  else apply(format == CohesiveFileOrder::vtk ? O3::vtk : format == CohesiveFileOrder::gmsh ? O3::gmsh : O3::abaqus);
+}
+
+// The name the writers give a phase pair's cohesive set, compared without case: the label
+// of "COH_" + A + "_" + B (letters, digits, '_' and '-' kept, anything else '_', at most 80
+// characters; mesh_write.cpp's abaqus_label, which starts with a letter here).
+inline std::string cohesive_set_label(std::string_view lower_name, std::string_view upper_name) {
+  std::string label = "COH_";
+  label.append(lower_name);
+  label += '_';
+  label.append(upper_name);
+  for (char& c : label) {
+    const bool kept = (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_' || c == '-';
+    c = kept ? static_cast<char>(std::toupper(static_cast<unsigned char>(c))) : '_';
+  }
+  return label.substr(0, 80);
+}
+
+// The phase pairs (p < q) a cohesive set's name denotes among `phases` (id → name, "phase<id>"
+// for a phase the file does not name): COH_<A>_<B> with the names' labels, or COH_<p>_<q>
+// with the ids. Every fitting pair, ascending.
+inline std::vector<std::array<std::int32_t, 2>> cohesive_pairs_named(std::string_view set_name,
+                                                                    const std::map<int, std::string>& phases) {
+  std::vector<std::array<std::int32_t, 2>> pairs;
+  const std::string wanted = upper(set_name);
+  for (auto p = phases.begin(); p != phases.end(); ++p)
+    for (auto q = std::next(p); q != phases.end(); ++q)
+      if (cohesive_set_label(p->second, q->second) == wanted ||
+          cohesive_set_label(std::to_string(p->first), std::to_string(q->first)) == wanted)
+        pairs.push_back({p->first, q->first});
+  return pairs;
+}
+
+inline bool names_cohesive_set(std::string_view name) { return name.size() >= 4 && upper(name.substr(0, 4)) == "COH_"; }
 
 // Whitespace-separated tokens with line numbers for errors.
 class Scanner {
@@ -310,21 +368,48 @@ struct TaggedCells {
     std::array<long long, 4> nodes;  // file node tags
   };
   std::vector<Cell> triangles, tetrahedra;
+  // Cells the file marks cohesive (quads, prisms), nodes already in the internal order.
+  struct CohesiveCell {
+    long long tag;
+    std::int32_t set;  // index into RawMesh::cohesive_sets, or LoadedMesh::kNoCohesiveSet
+    bool several_sets;  // in other sets too (then written as LoadedMesh::kSeveralCohesiveSets)
+    std::array<std::int32_t, 2> phases;  // as the file claims them; 0 = unsaid
+    int corners;  // 4 or 6
+    std::array<long long, 6> nodes;  // file node tags, internal order
+  };
+  std::vector<CohesiveCell> cohesive;
+
+  std::vector<Cell>& kept() { return tetrahedra.empty() ? triangles : tetrahedra; }
+
+  // The name of every phase id the kept cells use: `names`' entry, or "phase<id>" as
+  // finish() names it.
+  std::map<int, std::string> used_phase_names(const std::map<int, std::string>& names) {
+    std::map<int, std::string> used;
+    std::int32_t last = 0;
+    for (const Cell& c : kept()) {
+      if ((c.phase == last && !used.empty()) || used.count(c.phase)) continue;
+      last = c.phase;
+      const auto it = names.find(c.phase);
+      used[c.phase] = it != names.end() && !it->second.empty() ? it->second : "phase" + std::to_string(c.phase);
+    }
+    return used;
+  }
 
   // Ascending tag order; O(n) when the tags are a permutation of a range (as we write them).
-  static void sort_by_tag(std::vector<Cell>& cells) {
+  template <class C>
+  static void sort_by_tag(std::vector<C>& cells) {
     if (cells.empty()) return;
-    if (std::is_sorted(cells.begin(), cells.end(), [](const Cell& a, const Cell& b) { return a.tag < b.tag; }))
+    if (std::is_sorted(cells.begin(), cells.end(), [](const C& a, const C& b) { return a.tag < b.tag; }))
       return;
     long long lo = cells[0].tag, hi = cells[0].tag;
-    for (const Cell& c : cells) lo = std::min(lo, c.tag), hi = std::max(hi, c.tag);
+    for (const C& c : cells) lo = std::min(lo, c.tag), hi = std::max(hi, c.tag);
     // Unsigned: tags may span the whole long long range.
     const auto span = static_cast<unsigned long long>(hi) - static_cast<unsigned long long>(lo);
     if (span == cells.size() - 1) {
-      std::vector<Cell> placed(cells.size());
+      std::vector<C> placed(cells.size());
       std::vector<bool> filled(cells.size(), false);
       bool permutation = true;
-      for (const Cell& c : cells) {
+      for (const C& c : cells) {
         const auto at = static_cast<std::size_t>(static_cast<unsigned long long>(c.tag) -
                                                  static_cast<unsigned long long>(lo));
         if (filled[at]) { permutation = false; break; }
@@ -336,11 +421,11 @@ struct TaggedCells {
         return;
       }
     }
-    std::stable_sort(cells.begin(), cells.end(), [](const Cell& a, const Cell& b) { return a.tag < b.tag; });
+    std::stable_sort(cells.begin(), cells.end(), [](const C& a, const C& b) { return a.tag < b.tag; });
   }
 
   void finish(RawMesh& raw, const TagMap& nodes, const std::string& path) {
-    std::vector<Cell>& kept = tetrahedra.empty() ? triangles : tetrahedra;
+    std::vector<Cell>& kept = this->kept();
     raw.corners = kept.empty() ? 0 : (tetrahedra.empty() ? 3 : 4);
     sort_by_tag(kept);
     raw.cell_nodes.reserve(kept.size() * static_cast<std::size_t>(raw.corners));
@@ -355,6 +440,24 @@ struct TaggedCells {
         raw.cell_nodes.push_back(static_cast<LocalId>(i));
       }
       raw.cell_phase.push_back(c.phase);
+    }
+    if (cohesive.empty()) return;
+    sort_by_tag(cohesive);
+    raw.cohesive_corners = cohesive.front().corners;
+    raw.cohesive_nodes.reserve(cohesive.size() * static_cast<std::size_t>(raw.cohesive_corners));
+    for (const CohesiveCell& c : cohesive) {
+      if (c.corners != raw.cohesive_corners)
+        throw InputError(path, "", "cohesive element " + std::to_string(c.tag) +
+                                       " is not of the same kind as the others (quads and prisms mixed)");
+      for (int k = 0; k < c.corners; ++k) {
+        const std::int64_t i = nodes.index(c.nodes[static_cast<std::size_t>(k)]);
+        if (i < 0)
+          throw InputError(path, "", "cohesive element " + std::to_string(c.tag) + " uses node " +
+                                         std::to_string(c.nodes[static_cast<std::size_t>(k)]) + ", which is not defined");
+        raw.cohesive_nodes.push_back(static_cast<LocalId>(i));
+      }
+      raw.cohesive_phase.insert(raw.cohesive_phase.end(), c.phases.begin(), c.phases.end());
+      raw.cohesive_set_of_cell.push_back(c.several_sets ? LoadedMesh::kSeveralCohesiveSets : c.set);
     }
   }
 };

@@ -48,6 +48,62 @@ void add_gmsh_cell(TaggedCells& cells, const Scanner& s, long long type, long lo
 // Names by (dimension, physical tag): tags are numbered per dimension.
 using PhysicalNames = std::map<std::pair<int, int>, std::string>;
 
+// Quadrangles (2D) and prisms (3D) are cells only in a physical group named COH_*: the
+// cohesive cells our writer puts there. Sets are numbered in order of first use here, and
+// renumbered once the mesh's dimension is known (resolve_cohesive_sets).
+struct CohesiveGroups {
+  std::map<std::pair<int, int>, std::int32_t> set_of;  // (dimension, physical tag) → set
+  std::vector<std::pair<int, int>> groups;             // per set: (dimension, physical tag)
+
+  static int dimension_of(long long type) { return type == 3 ? 2 : type == 6 ? 3 : -1; }
+  // The set of an element of `type` whose first physical tag is `physical`, or -1 when it
+  // is no cohesive cell.
+  std::int32_t set_for(long long type, long long physical, const PhysicalNames& names) {
+    const int dimension = dimension_of(type);
+    if (dimension < 0 || physical < std::numeric_limits<int>::min() || physical > std::numeric_limits<int>::max()) return -1;
+    const std::pair<int, int> key{dimension, static_cast<int>(physical)};
+    const auto name = names.find(key);
+    if (name == names.end() || !names_cohesive_set(name->second)) return -1;
+    const auto [it, added] = set_of.emplace(key, static_cast<std::int32_t>(groups.size()));
+    if (added) groups.push_back(key);
+    return it->second;
+  }
+};
+
+void add_cohesive_cell(TaggedCells& cells, long long type, long long tag, std::int32_t set, bool several_sets,
+                       const std::array<long long, 6>& file_nodes) {
+  TaggedCells::CohesiveCell c{tag, set, several_sets, {0, 0}, type == 3 ? 4 : 6, {}};
+  cohesive_to_internal(c.corners, CohesiveFileOrder::gmsh, file_nodes.data(), c.nodes.data());
+  cells.cohesive.push_back(c);
+}
+
+// The cohesive sets of the mesh's dimension: every COH_* physical group of that dimension
+// (used or not, ascending tag), each with the phase pairs its name denotes; a cell's phases
+// are the one pair its set's name denotes ({0, 0} when none or several fit).
+void resolve_cohesive_sets(RawMesh& raw, TaggedCells& cells, const CohesiveGroups& found, const PhysicalNames& names) {
+  const int dimension = cells.tetrahedra.empty() ? 2 : 3;
+  std::map<int, std::string> phase_names;
+  for (const auto& [key, name] : names)
+    if (key.first == dimension) phase_names[key.second] = name;
+  const std::map<int, std::string> phases = cells.used_phase_names(phase_names);
+  std::map<std::pair<int, int>, std::int32_t> final_set;
+  for (const auto& [key, name] : names)
+    if (key.first == dimension && names_cohesive_set(name)) {
+      final_set.emplace(key, static_cast<std::int32_t>(raw.cohesive_sets.size()));
+      raw.cohesive_sets.push_back({name, cohesive_pairs_named(name, phases)});
+    }
+  for (TaggedCells::CohesiveCell& c : cells.cohesive) {
+    const auto it = final_set.find(found.groups[static_cast<std::size_t>(c.set)]);
+    if (it == final_set.end()) {  // a group of the other dimension: finish() refuses the mix
+      c.set = LoadedMesh::kNoCohesiveSet;
+      continue;
+    }
+    c.set = it->second;
+    const auto& pairs = raw.cohesive_sets[static_cast<std::size_t>(c.set)].named_pairs;
+    if (pairs.size() == 1) c.phases = pairs.front();
+  }
+}
+
 void read_physical_names(Scanner& s, PhysicalNames& names) {
   const std::size_t count = s.count("$PhysicalNames", 3);
   for (std::size_t i = 0; i < count; ++i) {
@@ -127,8 +183,9 @@ LoadedMesh read_msh(const std::string& path) {
   TaggedCells cells;
   std::vector<long long> node_tags;
   PhysicalNames physical_names;
-  // (dimension, entity tag) → first physical tag, 0 when none.
-  std::map<std::pair<int, long long>, int> entity_physical;
+  // (dimension, entity tag) → first physical tag (0 when none) and how many it has.
+  std::map<std::pair<int, long long>, std::pair<int, long long>> entity_physical;
+  CohesiveGroups cohesive_groups;
   bool seen_nodes = false, seen_elements = false;
   struct PeriodicTags {
     int entity_dimension = 0, entity = 0, master_entity = 0;
@@ -137,10 +194,10 @@ LoadedMesh read_msh(const std::string& path) {
   };
   std::vector<PeriodicTags> periodic;
 
-  auto read_nodes = [&](std::array<long long, 4>& nodes, int n, MshValues& v) {
+  auto read_nodes = [&](auto& nodes, int n, MshValues& v) {
     for (int k = 0; k < n; ++k) {
       const long long node = v.size();
-      if (k < 4) nodes[static_cast<std::size_t>(k)] = node;
+      if (static_cast<std::size_t>(k) < nodes.size()) nodes[static_cast<std::size_t>(k)] = node;
     }
   };
 
@@ -167,7 +224,7 @@ LoadedMesh read_msh(const std::string& path) {
             const long long bounding = v.count("bounding entities", 1);
             for (long long k = 0; k < bounding; ++k) v.integer();
           }
-          entity_physical[{dim, tag}] = physical;
+          entity_physical[{dim, tag}] = {physical, physical_count};
         }
       v.done();
       s.expect("$EndEntities");
@@ -221,10 +278,21 @@ LoadedMesh read_msh(const std::string& path) {
           const long long entity_tag = v.integer();
           const long long type = v.integer();
           const long long count = v.count("elements in a block", 2);
+          const auto it = entity_physical.find({entity_dim, entity_tag});
+          const std::int32_t phase = it != entity_physical.end() && it->second.first != 0 ? it->second.first : 1;
+          const std::int32_t cohesive_set =
+              it == entity_physical.end() ? -1 : cohesive_groups.set_for(type, it->second.first, physical_names);
+          if (cohesive_set >= 0) {
+            for (long long i = 0; i < count; ++i) {
+              const long long tag = v.size();
+              std::array<long long, 6> nodes{};
+              read_nodes(nodes, type == 3 ? 4 : 6, v);
+              add_cohesive_cell(cells, type, tag, cohesive_set, it->second.second > 1, nodes);
+            }
+            continue;
+          }
           const int n = gmsh_node_count(type);
           if (n == 0) unsupported_gmsh_type(s, type);
-          const auto it = entity_physical.find({entity_dim, entity_tag});
-          const std::int32_t phase = it != entity_physical.end() && it->second != 0 ? it->second : 1;
           for (long long i = 0; i < count; ++i) {
             const long long tag = v.size();
             std::array<long long, 4> nodes{};
@@ -241,7 +309,8 @@ LoadedMesh read_msh(const std::string& path) {
           const long long type = c.read<std::int32_t>();
           const long long following = c.read<std::int32_t>();
           const long long tag_count = c.read<std::int32_t>();
-          const int n = gmsh_node_count(type);
+          const bool maybe_cohesive = CohesiveGroups::dimension_of(type) > 0;  // decided per element by its tag
+          const int n = maybe_cohesive ? (type == 3 ? 4 : 6) : gmsh_node_count(type);
           if (n == 0) unsupported_gmsh_type(s, type);
           if (following <= 0 || following > count - read || tag_count < 0)
             throw InputError(path, "$Elements", "bad element run header (" + std::to_string(following) + " elements, " +
@@ -250,16 +319,17 @@ LoadedMesh read_msh(const std::string& path) {
           for (long long i = 0; i < following; ++i) {
             const long long tag = c.read<std::int32_t>();
             std::int32_t phase = 1;
+            long long physical = 0;
             for (long long k = 0; k < tag_count; ++k) {
               const std::int32_t t = c.read<std::int32_t>();
+              if (k == 0) physical = t;
               if (k == 0 && t != 0) phase = t;
             }
-            std::array<long long, 4> nodes{};
-            for (int k = 0; k < n; ++k) {
-              const std::int32_t node = c.read<std::int32_t>();
-              if (k < 4) nodes[static_cast<std::size_t>(k)] = node;
-            }
-            add_gmsh_cell(cells, s, type, tag, phase, nodes);
+            std::array<long long, 6> nodes{};
+            for (int k = 0; k < n; ++k) nodes[static_cast<std::size_t>(k)] = c.read<std::int32_t>();
+            const std::int32_t cohesive_set = maybe_cohesive ? cohesive_groups.set_for(type, physical, physical_names) : -1;
+            if (cohesive_set >= 0) add_cohesive_cell(cells, type, tag, cohesive_set, false, nodes);
+            else add_gmsh_cell(cells, s, type, tag, phase, {nodes[0], nodes[1], nodes[2], nodes[3]});
           }
           read += following;
         }
@@ -271,20 +341,21 @@ LoadedMesh read_msh(const std::string& path) {
           const long long type = s.integer();
           const long long tag_count = s.integer();
           std::int32_t phase = 1;
+          long long physical = 0;
           for (long long k = 0; k < tag_count; ++k) {
             const long long t = s.integer();
+            if (k == 0) physical = t;
             if (k == 0 && t != 0)
               phase = static_cast<std::int32_t>(std::clamp<long long>(t, std::numeric_limits<std::int32_t>::min(),
                                                                       std::numeric_limits<std::int32_t>::max()));
           }
-          const int n = gmsh_node_count(type);
+          const std::int32_t cohesive_set = cohesive_groups.set_for(type, physical, physical_names);
+          const int n = cohesive_set >= 0 ? (type == 3 ? 4 : 6) : gmsh_node_count(type);
           if (n == 0) unsupported_gmsh_type(s, type);
-          std::array<long long, 4> nodes{};
-          for (int k = 0; k < n; ++k) {
-            const long long node = s.integer();
-            if (k < 4) nodes[static_cast<std::size_t>(k)] = node;
-          }
-          add_gmsh_cell(cells, s, type, tag, phase, nodes);
+          std::array<long long, 6> nodes{};
+          for (int k = 0; k < n; ++k) nodes[static_cast<std::size_t>(k)] = s.integer();
+          if (cohesive_set >= 0) add_cohesive_cell(cells, type, tag, cohesive_set, false, nodes);
+          else add_gmsh_cell(cells, s, type, tag, phase, {nodes[0], nodes[1], nodes[2], nodes[3]});
         }
       }
       s.expect("$EndElements");
@@ -319,6 +390,7 @@ LoadedMesh read_msh(const std::string& path) {
   }
   if (!seen_nodes || !seen_elements) throw InputError(path, "", "missing $Nodes or $Elements");
   const TagMap map = sort_nodes_by_tag(raw, node_tags, path);
+  if (!cells.cohesive.empty()) resolve_cohesive_sets(raw, cells, cohesive_groups, physical_names);
   cells.finish(raw, map, path);
   for (const PeriodicTags& link : periodic) {
     LoadedMesh::PeriodicLink out{link.entity_dimension, link.entity, link.master_entity, link.affine, {}};

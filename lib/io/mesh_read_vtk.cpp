@@ -85,6 +85,7 @@ const VtkType* vtk_type(std::string_view name) {
 struct GridArrays {
   std::size_t number_of_points = 0, number_of_cells = 0;
   std::optional<DataValues> points, connectivity, offsets, types, phase, partition, global_id, periodic_master;
+  std::optional<DataValues> cohesive, phase_top, node_phase;  // cohesive meshes (mesh_write.cpp)
   std::map<int, std::string> phase_names;  // from field data
   // meshio's convention for Gmsh physical names: an integer field array NAME = [tag, dim].
   std::vector<std::tuple<std::string, std::int64_t, std::int64_t>> tag_dimension_names;
@@ -92,10 +93,16 @@ struct GridArrays {
 
 bool is_phase_array(std::string_view name) { return name == "phase" || name == "gmsh:physical" || name == "medit:ref"; }
 
+bool is_cell_array(std::string_view name) {
+  return is_phase_array(name) || name == "partition" || name == "cohesive" || name == "phase_top";
+}
+
 // Keeps "phase" over the other tools' names for it.
 void take_cell_array(GridArrays& g, std::string_view name, DataValues&& values) {
   if (name == "phase" || (!g.phase && is_phase_array(name))) g.phase = std::move(values);
   else if (name == "partition") g.partition = std::move(values);
+  else if (name == "cohesive") g.cohesive = std::move(values);
+  else if (name == "phase_top") g.phase_top = std::move(values);
 }
 
 // Field data: phase_names (bytes, each name ended by 0: our UInt8 array or VTK's String
@@ -132,6 +139,35 @@ void take_field_arrays(GridArrays& g, const std::vector<std::pair<std::string, D
   }
 }
 
+std::int32_t int32_value(std::int64_t v, const char* what, const std::string& path) {
+  if (v < std::numeric_limits<std::int32_t>::min() || v > std::numeric_limits<std::int32_t>::max())
+    throw InputError(path, what, "value " + std::to_string(v) + " is out of range");
+  return static_cast<std::int32_t>(v);
+}
+
+// Cell c of the grid, marked cohesive: its nodes from VTK's order to the internal one, its
+// phases from phase (the bottom's) and phase_top (0 where an array is missing).
+void add_cohesive_cell(RawMesh& raw, const GridArrays& g, std::size_t c, std::int64_t start, std::int64_t end,
+                       const std::string& path) {
+  const int corners = raw.cohesive_corners;
+  if (end - start != corners)
+    throw InputError(path, "", "cohesive cell " + std::to_string(c) + " has " + std::to_string(end - start) +
+                                   " nodes, expected " + std::to_string(corners));
+  std::array<LocalId, 6> file{}, internal{};
+  for (int k = 0; k < corners; ++k) {
+    const std::int64_t node = g.connectivity->integer(static_cast<std::size_t>(start + k));
+    if (node < 0 || static_cast<std::uint64_t>(node) >= g.number_of_points)
+      throw InputError(path, "", "cell " + std::to_string(c) + " refers to node " + std::to_string(node) + " of " +
+                                     std::to_string(g.number_of_points));
+    file[static_cast<std::size_t>(k)] = static_cast<LocalId>(node);
+  }
+  cohesive_to_internal(corners, CohesiveFileOrder::vtk, file.data(), internal.data());
+  raw.cohesive_nodes.insert(raw.cohesive_nodes.end(), internal.begin(), internal.begin() + corners);
+  raw.cohesive_phase.push_back(g.phase ? int32_value(g.phase->integer(c), "phase", path) : 0);
+  raw.cohesive_phase.push_back(g.phase_top ? int32_value(g.phase_top->integer(c), "phase_top", path) : 0);
+  if (g.partition) raw.cohesive_partition.push_back(int32_value(g.partition->integer(c), "partition", path));
+}
+
 RawMesh assemble(GridArrays& g, const std::string& path) {
   RawMesh raw;
   if (!g.points) throw InputError(path, "Points", "no Points array");
@@ -147,10 +183,21 @@ RawMesh assemble(GridArrays& g, const std::string& path) {
                                          std::to_string(number_of_points) + " needs 3 × as many");
   // Real values read as integers could be anything (NaN, 1e300): integer arrays only.
   if (types.is_real() || connectivity.is_real() || offsets.is_real() || (g.phase && g.phase->is_real()) ||
-      (g.partition && g.partition->is_real()))
-    throw InputError(path, "", "connectivity, offsets, types, phase and partition must be integer arrays");
+      (g.partition && g.partition->is_real()) || (g.cohesive && g.cohesive->is_real()) ||
+      (g.phase_top && g.phase_top->is_real()))
+    throw InputError(path, "", "connectivity, offsets, types, phase, partition, cohesive and phase_top must be integer arrays");
   if (types.size() != number_of_cells || offsets.size() != number_of_cells)
     throw InputError(path, "Cells", "offsets/types do not have one entry per cell");
+  if (g.cohesive && g.cohesive->size() != number_of_cells) throw InputError(path, "cohesive", "array has the wrong size");
+  if (g.phase_top && g.phase_top->size() != number_of_cells) throw InputError(path, "phase_top", "array has the wrong size");
+  // A quad (2D) or wedge (3D) is read only where cell data cohesive = 1 mark it.
+  const auto marked_cohesive = [&](std::size_t c) {
+    if (!g.cohesive) return false;
+    const std::int64_t flag = g.cohesive->integer(c);
+    if (flag != 0 && flag != 1)
+      throw InputError(path, "cohesive", "value " + std::to_string(flag) + " of cell " + std::to_string(c) + " is not 0 or 1");
+    return flag == 1;
+  };
 
   raw.coords.resize(points.size());
   if (!points.ascii && points.type->is_real && points.type->bytes == 8 && points.size() > 0)
@@ -160,9 +207,18 @@ RawMesh assemble(GridArrays& g, const std::string& path) {
 
   // Keep the cells of the top dimension; points and lines (and triangles next to tets) go.
   bool has_tets = false;
+  std::int64_t cohesive_type = 0;  // 9 or 13 once a cohesive cell is seen
   for (std::size_t c = 0; c < number_of_cells; ++c) {
     const std::int64_t t = types.integer(c);
-    if (t == 10) has_tets = true;
+    const bool cohesive = marked_cohesive(c);
+    if (cohesive && t != 9 && t != 13)
+      throw InputError(path, "cohesive", "cell " + std::to_string(c) + " is marked cohesive but has type " +
+                                             std::to_string(t) + " (a cohesive cell is a quad, 9, or a wedge, 13)");
+    if (cohesive) {
+      if (cohesive_type != 0 && t != cohesive_type)
+        throw InputError(path, "cohesive", "quads and wedges are both marked cohesive");
+      cohesive_type = t;
+    } else if (t == 10) has_tets = true;
     else if (t != 5 && t != 1 && t != 2 && t != 3 && t != 4) {
       static const std::map<std::int64_t, const char*> kNames = {
           {7, "polygon"}, {8, "pixel"}, {9, "quad"}, {11, "voxel"}, {12, "hexahedron"},
@@ -176,17 +232,14 @@ RawMesh assemble(GridArrays& g, const std::string& path) {
   }
   raw.corners = has_tets ? 4 : 3;
   const std::int64_t wanted = has_tets ? 10 : 5;
+  raw.cohesive_corners = cohesive_type == 9 ? 4 : cohesive_type == 13 ? 6 : 0;
   if (g.phase && g.phase->size() != number_of_cells) throw InputError(path, "phase", "array has the wrong size");
   if (g.partition && g.partition->size() != number_of_cells)
     throw InputError(path, "partition", "array has the wrong size");
   raw.cell_nodes.reserve(number_of_cells * static_cast<std::size_t>(raw.corners));
   if (g.phase) raw.cell_phase.reserve(number_of_cells);
   if (g.partition) raw.cell_partition.reserve(number_of_cells);
-  auto int32 = [&](std::int64_t v, const char* what) {
-    if (v < std::numeric_limits<std::int32_t>::min() || v > std::numeric_limits<std::int32_t>::max())
-      throw InputError(path, what, "value " + std::to_string(v) + " is out of range");
-    return static_cast<std::int32_t>(v);
-  };
+  auto int32 = [&](std::int64_t v, const char* what) { return int32_value(v, what, path); };
   std::int64_t previous_end = 0;
   std::size_t kept = 0;
   for (std::size_t c = 0; c < number_of_cells; ++c) {
@@ -195,6 +248,10 @@ RawMesh assemble(GridArrays& g, const std::string& path) {
     previous_end = end;
     if (end < start || static_cast<std::uint64_t>(end) > connectivity.size())
       throw InputError(path, "offsets", "bad offsets for cell " + std::to_string(c));
+    if (raw.cohesive_corners != 0 && marked_cohesive(c)) {
+      add_cohesive_cell(raw, g, c, start, end, path);
+      continue;
+    }
     if (types.integer(c) != wanted) continue;
     if (end - start != raw.corners)
       throw InputError(path, "", "cell " + std::to_string(c) + " has " + std::to_string(end - start) +
@@ -220,6 +277,11 @@ RawMesh assemble(GridArrays& g, const std::string& path) {
     if (g.periodic_master->is_real()) throw InputError(path, "periodic_master", "must be an integer array");
     raw.periodic_master.resize(g.periodic_master->size());
     for (std::size_t i = 0; i < g.periodic_master->size(); ++i) raw.periodic_master[i] = g.periodic_master->integer(i);
+  }
+  if (g.node_phase && raw.cohesive_corners != 0) {  // the copies' phases: only meaningful with cohesive cells
+    if (g.node_phase->is_real()) throw InputError(path, "node_phase", "must be an integer array");
+    raw.node_phase.resize(g.node_phase->size());
+    for (std::size_t i = 0; i < g.node_phase->size(); ++i) raw.node_phase[i] = int32_value(g.node_phase->integer(i), "node_phase", path);
   }
   raw.phase_names = g.phase_names;
   if (raw.phase_names.empty())
@@ -464,12 +526,13 @@ class VtuReader {
     }
     for (const pugi::xml_node a : piece.child("CellData").children("DataArray")) {
       const std::string name = a.attribute("Name").value();
-      if (is_phase_array(name) || name == "partition") take_cell_array(g, name, decode(a));
+      if (is_cell_array(name)) take_cell_array(g, name, decode(a));
     }
     for (const pugi::xml_node a : piece.child("PointData").children("DataArray")) {
       const std::string_view name = a.attribute("Name").value();
       if (name == "global_id") g.global_id = decode(a);
       else if (name == "periodic_master") g.periodic_master = decode(a);
+      else if (name == "node_phase") g.node_phase = decode(a);
     }
     std::vector<std::pair<std::string, DataValues>> field;
     for (const pugi::xml_node holder : {grid.child("FieldData"), piece.child("FieldData")})
@@ -696,8 +759,9 @@ class LegacyReader {
 
   enum class Where { dataset, cells, points };
   void take(GridArrays& g, Where where, const std::string& name, DataValues&& v) {
-    if (where == Where::cells && (is_phase_array(name) || name == "partition")) take_cell_array(g, name, std::move(v));
+    if (where == Where::cells && is_cell_array(name)) take_cell_array(g, name, std::move(v));
     else if (where == Where::points && name == "global_id") g.global_id = std::move(v);
+    else if (where == Where::points && name == "node_phase") g.node_phase = std::move(v);
   }
 
   DataValues values(std::size_t n, std::string_view type_name, const std::string& what) {
@@ -820,11 +884,21 @@ RawMesh merge_pieces(std::vector<RawMesh>& pieces, const std::vector<std::string
       throw InputError(piece_paths[k], "periodic_master", "has " + std::to_string(pieces[k].periodic_master.size()) +
                                                               " values for " + std::to_string(pieces[k].coords.size() / 3) +
                                                               " points");
+  // node_phase when every piece has it (a piece's cohesive cells are its own, its copies too).
+  const bool any_cohesive = std::any_of(pieces.begin(), pieces.end(), [](const RawMesh& p) { return p.cohesive_corners != 0; });
+  const bool node_phases = any_cohesive &&
+                           std::all_of(pieces.begin(), pieces.end(), [](const RawMesh& p) { return !p.node_phase.empty(); });
+  for (std::size_t k = 0; k < pieces.size() && node_phases; ++k)
+    if (pieces[k].node_phase.size() != pieces[k].coords.size() / 3)
+      throw InputError(piece_paths[k], "node_phase", "has " + std::to_string(pieces[k].node_phase.size()) + " values for " +
+                                                         std::to_string(pieces[k].coords.size() / 3) + " points");
   for (std::size_t k = 0; k < pieces.size(); ++k) {
     RawMesh& p = pieces[k];
     if (p.corners == 0) continue;
     if (merged.corners != 0 && p.corners != merged.corners)
       throw InputError(piece_paths[k], "", "its cells are not of the same kind as the other pieces'");
+    if (p.cohesive_corners != 0 && merged.cohesive_corners != 0 && p.cohesive_corners != merged.cohesive_corners)
+      throw InputError(piece_paths[k], "cohesive", "its cohesive cells are not of the same kind as the other pieces'");
     merged.corners = p.corners;
     const std::size_t nodes = p.coords.size() / 3;
     std::vector<LocalId> local(nodes);
@@ -845,13 +919,27 @@ RawMesh merge_pieces(std::vector<RawMesh>& pieces, const std::vector<std::string
                              p.coords.begin() + static_cast<std::ptrdiff_t>(3 * n + 3));
         if (by_global_id) merged.node_global_id.push_back(p.node_global_id[n]);
         if (masters) merged.periodic_master.push_back(p.periodic_master[n]);
+        if (node_phases) merged.node_phase.push_back(p.node_phase[n]);
       } else if (masters && merged.periodic_master[static_cast<std::size_t>(id)] != p.periodic_master[n]) {
         throw InputError(piece_paths[k], "periodic_master",
                          "node with global id " + std::to_string(p.node_global_id[n]) + " has master " +
                              std::to_string(p.periodic_master[n]) + " here and " +
                              std::to_string(merged.periodic_master[static_cast<std::size_t>(id)]) + " in an earlier piece");
+      } else if (node_phases && merged.node_phase[static_cast<std::size_t>(id)] != p.node_phase[n]) {
+        throw InputError(piece_paths[k], "node_phase",
+                         "node with global id " + std::to_string(p.node_global_id[n]) + " has phase " +
+                             std::to_string(p.node_phase[n]) + " here and " +
+                             std::to_string(merged.node_phase[static_cast<std::size_t>(id)]) + " in an earlier piece");
       }
       local[n] = id;
+    }
+    if (p.cohesive_corners != 0) {
+      merged.cohesive_corners = p.cohesive_corners;
+      for (const LocalId node : p.cohesive_nodes) merged.cohesive_nodes.push_back(local[static_cast<std::size_t>(node)]);
+      merged.cohesive_phase.insert(merged.cohesive_phase.end(), p.cohesive_phase.begin(), p.cohesive_phase.end());
+      if (any_partition && p.cohesive_partition.empty())
+        p.cohesive_partition.assign(p.cohesive_phase.size() / 2, static_cast<std::int32_t>(k));
+      merged.cohesive_partition.insert(merged.cohesive_partition.end(), p.cohesive_partition.begin(), p.cohesive_partition.end());
     }
     for (const LocalId node : p.cell_nodes) merged.cell_nodes.push_back(local[static_cast<std::size_t>(node)]);
     const std::size_t cells = p.cell_nodes.size() / static_cast<std::size_t>(p.corners);
@@ -901,6 +989,12 @@ LoadedMesh read_pvtu(const std::string& path) {
     pieces.push_back(read_vtu_raw(piece_paths.back()));
   }
   if (pieces.empty()) throw InputError(path, "Piece", "no pieces");
+  for (std::size_t k = 0; k < pieces.size(); ++k)
+    if (pieces[k].node_global_id.empty() &&
+        std::any_of(pieces.begin(), pieces.end(), [](const RawMesh& p) { return p.cohesive_corners != 0; }))
+      throw InputError(path, "global_id",
+                       "piece " + piece_paths[k] + " has none, but the pieces hold cohesive cells: merging them by "
+                       "coordinates would weld the copies");
   return finish(merge_pieces(pieces, piece_paths), path);
 }
 
