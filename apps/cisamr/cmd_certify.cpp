@@ -1,6 +1,8 @@
 // cisamr certify MESH [--scene SCENE] [--html R.html] [--json R.json] [--bound X]
 // Checks any mesh io::read_mesh can read: aspect ratio against the bound, conformity, and
-// (with --scene) phase fidelity, 2D and 3D. Exit status 3 when the mesh fails, 0 when it passes.
+// (with --scene) phase fidelity, 2D and 3D. A mesh with cohesive cells is certified on its
+// bulk welded by exact coordinates (quality::weld_view), and its cohesive cells and sets
+// are checked too (quality::certify_cohesive). Exit status 3 when the mesh fails, 0 when it passes.
 #include <cstdio>
 #include <exception>
 #include <map>
@@ -35,6 +37,18 @@ template <int Dim>
 quality::Certificate certify_mesh(const mesh::SimplexMesh<Dim>& mesh, const geometry::SceneDesc* scene,
                                   const quality::CertifyOptions& options, const GlobalFlags& flags,
                                   PhaseTimes& times) {
+  if (mesh.cohesive.count() > 0) {  // the checks of a mesh without cohesive cells, on the welded bulk
+    progress(flags, "welding the cohesive copies");
+    const quality::WeldedMesh<Dim> welded = [&] {
+      ScopedPhase timer(&times, "weld");
+      return quality::weld_view<Dim>(mesh);
+    }();
+    quality::Certificate c = certify_mesh<Dim>(welded.mesh, scene, options, flags, times);
+    c.notes.push_back("cohesive mesh: the checks above ran on the bulk cells with their " +
+                      std::to_string(mesh.node_count()) + " nodes welded by exact coordinates into " +
+                      std::to_string(welded.mesh.node_count()));
+    return c;
+  }
   if (!scene) {
     ScopedPhase timer(&times, "certify");
     progress(flags, "checking the mesh (domain = its bounding box)");
@@ -78,6 +92,24 @@ std::string match_scene_phases(const CertifyArgs& args, io::LoadedMesh& loaded, 
   return note;
 }
 
+// The cohesive cells' checks, with the phase ids the file gives them (the bottom is on the
+// lower id of the file's numbering, so these run before any relabelling to the scene's).
+template <int Dim>
+std::optional<quality::CohesiveSection> certify_cohesive_cells(const io::LoadedMesh& loaded,
+                                                               const mesh::SimplexMesh<Dim>& mesh,
+                                                               const GlobalFlags& flags, PhaseTimes& times) {
+  if (mesh.cohesive.count() == 0) return std::nullopt;
+  progress(flags, "checking the cohesive cells");
+  ScopedPhase timer(&times, "cohesive");
+  std::optional<quality::CohesiveSetsInFile> sets;
+  if (!loaded.cohesive_set_of_cell.empty()) {
+    sets.emplace();
+    for (const io::LoadedMesh::CohesiveSet& set : loaded.cohesive_sets) sets->sets.push_back({set.name, set.named_pairs});
+    sets->set_of_cell = loaded.cohesive_set_of_cell;
+  }
+  return quality::certify_cohesive<Dim>(mesh, sets ? &*sets : nullptr);
+}
+
 quality::Certificate certify_loaded(const CertifyArgs& args, io::LoadedMesh& loaded,
                                     const GlobalFlags& flags, PhaseTimes& times) {
   quality::CertifyOptions options;
@@ -97,12 +129,16 @@ quality::Certificate certify_loaded(const CertifyArgs& args, io::LoadedMesh& loa
   } else if (!args.phase_map.empty()) {
     throw InputError("--phase-map", "", "needs --scene (the phases are mapped to the scene's)");
   }
+  const std::optional<quality::CohesiveSection> cohesive =
+      loaded.dimension == 2 ? certify_cohesive_cells<2>(loaded, loaded.mesh2, flags, times)
+                            : certify_cohesive_cells<3>(loaded, loaded.mesh3, flags, times);
   std::string match_note;
   if (scene) match_note = match_scene_phases(args, loaded, *scene);
   const geometry::SceneDesc* scene_or_none = scene ? &*scene : nullptr;
   quality::Certificate c = loaded.dimension == 2 ? certify_mesh<2>(loaded.mesh2, scene_or_none, options, flags, times)
                                                  : certify_mesh<3>(loaded.mesh3, scene_or_none, options, flags, times);
   if (!match_note.empty()) c.notes.push_back(match_note);
+  c.cohesive = cohesive;
   return c;
 }
 
@@ -111,7 +147,7 @@ quality::Certificate certify_loaded(const CertifyArgs& args, io::LoadedMesh& loa
 void add_certify_command(CLI::App& app, GlobalFlags& flags, int& exit_code) {
   auto args = std::make_shared<CertifyArgs>();
   CLI::App* cmd = app.add_subcommand(
-      "certify", "Check a mesh (aspect ratio, conformity, phase fidelity) and write its certificate");
+      "certify", "Check a mesh (aspect ratio, conformity, phase fidelity, cohesive cells) and write its certificate");
   cmd->add_option("mesh", args->mesh,
                   "Mesh file: .vtu (plain or zlib-compressed), .pvtu, .vtk (legacy), .msh (Gmsh 4.1/2.2, ASCII or "
                   "binary), .inp (Abaqus), .mesh (Medit), .node/.ele (TetGen)")

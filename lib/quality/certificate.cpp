@@ -115,6 +115,18 @@ std::vector<Counter> fidelity_counters(const FidelityReport& f) {
   return counters;
 }
 
+// "cohesive: 184760 elements in 1 set; every interface facet covered once", or the failures.
+std::string cohesive_line(const CohesiveSection& s) {
+  std::string line = "cohesive: " + std::to_string(s.cells) + " elements in " + std::to_string(s.sets.size()) +
+                     (s.sets_named ? (s.sets.size() == 1 ? " set" : " sets") : (s.sets.size() == 1 ? " phase pair" : " phase pairs")) +
+                     "; ";
+  if (s.ok()) return line + "every interface facet covered once";
+  std::string problems;
+  for (const CohesiveSection::Count& k : s.checks)
+    if (k.value > 0) add_item(problems, std::to_string(k.value) + " " + k.label);
+  return line + "FAILED (" + problems + ")";
+}
+
 bool measure_checked(const ConformityReport& r) { return r.expected_measure >= 0; }
 bool measure_ok(const ConformityReport& r) { return !measure_checked(r) || r.measure_error <= r.measure_tolerance; }
 
@@ -213,6 +225,97 @@ template Certificate certify<3>(const mesh::SimplexMesh<3>&, const Box<3>&, cons
 
 // ---------------------------------------------------------------------------------------
 
+bool CohesiveSection::ok() const {
+  return std::all_of(checks.begin(), checks.end(), [](const Count& k) { return k.value == 0; });
+}
+
+template <int Dim>
+CohesiveSection certify_cohesive(const mesh::SimplexMesh<Dim>& m, const CohesiveSetsInFile* sets) {
+  constexpr std::size_t kExamplesPerKind = 3, kExamplesTotal = 24;
+  const CohesiveReport<Dim> r = check_cohesive<Dim>(m);
+  CohesiveSection s;
+  s.cells = r.cohesive_cells;
+  s.interface_facets = r.interface_facets;
+  s.nodes = m.node_count();
+  const auto example = [&](const std::string& text) {
+    if (s.examples.size() < kExamplesTotal) s.examples.push_back(text);
+  };
+  const auto add = [&](const char* key, const char* label, const CohesiveFinding<Dim>& f, const char* what) {
+    s.checks.push_back({key, label, f.count});
+    for (std::size_t i = 0; i < f.ids.size() && i < kExamplesPerKind; ++i) {
+      if (f.ids[i] < 0) {
+        example(std::string(label) + ": arrays of inconsistent sizes");
+        continue;
+      }
+      std::string at;
+      for (int d = 0; d < Dim; ++d) at += (d ? ", " : "") + num(f.points[i][d], 10);
+      example(std::string(label) + ": " + what + " " + std::to_string(f.ids[i]) + " at (" + at + ")");
+    }
+  };
+  add("malformed", "cohesive cells with missing or out-of-range nodes", r.malformed, "cohesive cell");
+  add("phase_mixed_nodes", "nodes used by bulk cells of two phases", r.phase_mixed_nodes, "node");
+  add("duplicate_copies", "nodes repeating a copy (same position and phase)", r.duplicate_copies, "node");
+  add("uncovered", "interface facets without a cohesive cell", r.uncovered, "facet of bulk cell");
+  add("covered_twice", "interface facets with several cohesive cells", r.covered_twice, "facet of bulk cell");
+  add("misplaced", "cohesive cells not on an interface facet of their two phases", r.misplaced, "cohesive cell");
+  add("not_coincident", "cohesive cells whose top is off their bottom", r.not_coincident, "cohesive cell");
+  add("wrong_sides", "cohesive cells whose bottom/top are not the lower/upper phase's nodes", r.wrong_sides,
+      "cohesive cell");
+  add("wrong_orientation", "cohesive cells whose bottom normal does not point into the top phase",
+      r.wrong_orientation, "cohesive cell");
+  add("node_phase_mismatch", "nodes whose node_phase is not their bulk cells' phase", r.node_phase_mismatch, "node");
+
+  const auto& coh = m.cohesive;
+  const auto claimed = [&](std::size_t c) {
+    return 2 * c + 1 < coh.phase.size() ? std::array<std::int32_t, 2>{coh.phase[2 * c], coh.phase[2 * c + 1]}
+                                        : std::array<std::int32_t, 2>{0, 0};
+  };
+  s.sets_named = sets != nullptr;
+  if (!sets) {  // no names: the pairs the cells claim, for the report
+    std::map<std::array<std::int32_t, 2>, std::size_t> pairs;
+    for (std::size_t c = 0; c < coh.count(); ++c) ++pairs[claimed(c)];
+    for (const auto& [pair, n] : pairs) s.sets.push_back({"", pair[0], pair[1], n});
+    return s;
+  }
+  std::vector<std::size_t> members(sets->sets.size(), 0);
+  std::size_t without = 0, several = 0, wrong = 0;
+  for (std::size_t c = 0; c < coh.count(); ++c) {
+    const std::int32_t set = c < sets->set_of_cell.size() ? sets->set_of_cell[c] : CohesiveSetsInFile::kNoSet;
+    if (set == CohesiveSetsInFile::kSeveralSets) {
+      if (several++ < kExamplesPerKind) example("cohesive cell " + std::to_string(c) + " is in several sets");
+      continue;
+    }
+    if (set < 0 || static_cast<std::size_t>(set) >= members.size()) {
+      if (without++ < kExamplesPerKind) example("cohesive cell " + std::to_string(c) + " is in no set");
+      continue;
+    }
+    ++members[static_cast<std::size_t>(set)];
+    const auto& named = sets->sets[static_cast<std::size_t>(set)].named_pairs;
+    if (std::find(named.begin(), named.end(), claimed(c)) == named.end() && wrong++ < kExamplesPerKind)
+      example("cohesive cell " + std::to_string(c) + " between phases " + std::to_string(claimed(c)[0]) + " and " +
+              std::to_string(claimed(c)[1]) + " is in set " + sets->sets[static_cast<std::size_t>(set)].name +
+              ", named for " + (named.empty() ? std::string("no pair of the file's phases")
+                                              : "phases " + std::to_string(named[0][0]) + " and " + std::to_string(named[0][1])));
+  }
+  std::size_t empty = 0;
+  for (std::size_t k = 0; k < sets->sets.size(); ++k) {
+    const auto& set = sets->sets[k];
+    s.sets.push_back({set.name, set.named_pairs.size() == 1 ? set.named_pairs[0][0] : 0,
+                      set.named_pairs.size() == 1 ? set.named_pairs[0][1] : 0, members[k]});
+    if (members[k] == 0 && empty++ < kExamplesPerKind) example("set " + set.name + " holds no cohesive cell");
+  }
+  s.checks.push_back({"cells_without_set", "cohesive cells in no set", without});
+  s.checks.push_back({"cells_in_several_sets", "cohesive cells in several sets", several});
+  s.checks.push_back({"cells_in_wrong_set", "cohesive cells in a set not named for their phases", wrong});
+  s.checks.push_back({"empty_sets", "cohesive sets without cells", empty});
+  return s;
+}
+
+template CohesiveSection certify_cohesive<2>(const mesh::SimplexMesh<2>&, const CohesiveSetsInFile*);
+template CohesiveSection certify_cohesive<3>(const mesh::SimplexMesh<3>&, const CohesiveSetsInFile*);
+
+// ---------------------------------------------------------------------------------------
+
 std::string certificate_json(const Certificate& c) {
   Json j;
   j["format"] = "cisamr-certificate/1";
@@ -302,6 +405,27 @@ std::string certificate_json(const Certificate& c) {
                      {"unmatched", a.unmatched}, {"facing_void", a.facing_void}, {"near_face_nodes", a.near_face_nodes}});
     j["periodic"] = {{"ok", c.periodic->ok}, {"axes", per}};
   }
+  if (c.cohesive) {
+    const CohesiveSection& s = *c.cohesive;
+    Json coh;
+    coh["ok"] = s.ok();
+    coh["elements"] = s.cells;
+    coh["interface_facets"] = s.interface_facets;
+    coh["nodes"] = s.nodes;
+    for (const CohesiveSection::Count& k : s.checks) coh[k.key] = k.value;
+    coh["sets_named"] = s.sets_named;
+    Json sets = Json::array();
+    for (const CohesiveSection::SetRow& row : s.sets) {
+      Json set;
+      set["name"] = s.sets_named ? Json(row.name) : Json(nullptr);
+      set["phases"] = row.lower != 0 || row.upper != 0 ? Json({row.lower, row.upper}) : Json(nullptr);
+      set["elements"] = row.cells;
+      sets.push_back(set);
+    }
+    coh["sets"] = sets;
+    coh["examples"] = s.examples;
+    j["cohesive"] = coh;
+  }
   j["notes"] = c.notes;
   return j.dump(2) + "\n";
 }
@@ -374,6 +498,23 @@ std::string certificate_html(const Certificate& c) {
 
   if (c.periodic)
     o << "<h2>Periodicity</h2>\n<p>" << html_escape(periodic_summary(*c.periodic)) << "</p>\n";
+  if (c.cohesive) {
+    const CohesiveSection& s = *c.cohesive;
+    o << "<h2>Cohesive elements</h2>\n<p>" << s.cells << " cohesive elements on " << s.interface_facets
+      << " interface facets; the checks above ran on the bulk mesh with its " << s.nodes
+      << " nodes welded by exact coordinates.</p>\n<table>\n<tr><th>check</th><th>count</th><th></th></tr>\n";
+    for (const CohesiveSection::Count& k : s.checks)
+      o << "<tr><td>" << html_escape(k.label) << "</td><td class=\"n\">" << k.value << "</td>" << status_cell(k.value == 0)
+        << "</tr>\n";
+    o << "</table>\n<table>\n<tr><th>" << (s.sets_named ? "set" : "phase pair") << "</th><th>phases</th><th>elements</th></tr>\n";
+    for (const CohesiveSection::SetRow& row : s.sets)
+      o << "<tr><td>" << (s.sets_named ? "<code>" + html_escape(row.name) + "</code>" : std::string("&#8212;")) << "</td><td>"
+        << (row.lower != 0 || row.upper != 0 ? html_escape(phase_label(c, row.lower) + " | " + phase_label(c, row.upper))
+                                             : std::string("none"))
+        << "</td><td class=\"n\">" << row.cells << "</td></tr>\n";
+    o << "</table>\n";
+    examples_html(o, s.examples);
+  }
   o << "<h2>Phase fidelity</h2>\n";
   if (c.fidelity) {
     const FidelityReport& f = *c.fidelity;
@@ -458,6 +599,7 @@ std::string certificate_summary(const Certificate& c) {
       }
   }
   if (c.periodic) o << "periodicity: " << periodic_summary(*c.periodic) << "\n";
+  if (c.cohesive) o << cohesive_line(*c.cohesive) << "\n";
   for (const auto& n : c.notes) o << "note: " << n << "\n";
   o << "certificate: " << (c.passed() ? "PASSED" : "FAILED") << "\n";
   return o.str();

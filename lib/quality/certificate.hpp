@@ -2,7 +2,9 @@
 // The certification result of a mesh (aspect-ratio statistics + conformity + optional phase
 // fidelity) and its renderings: JSON, a self-contained HTML page, a short text summary.
 // Pure functions returning strings; the caller writes them (io::AtomicFile).
+#include <array>
 #include <cstddef>
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <utility>
@@ -11,6 +13,7 @@
 #include "quality/periodic.hpp"
 #include "core/types.hpp"
 #include "mesh/simplex_mesh.hpp"
+#include "quality/cohesive.hpp"
 #include "quality/quality.hpp"
 
 namespace cisamr::quality {
@@ -32,6 +35,48 @@ struct CertifyOptions {
   double fidelity_tolerance = -1;  // < 0: default_fidelity_tolerance(scene)
 };
 
+// The element sets a file puts its cohesive cells in (.msh physical groups, .inp ELSETs;
+// io::LoadedMesh::cohesive_sets): what the set rules check. A format without set names
+// (.vtu) gives none, and the set rules are not checked.
+struct CohesiveSetsInFile {
+  struct Set {
+    std::string name;
+    std::vector<std::array<std::int32_t, 2>> named_pairs;  // the phase pairs (lower, upper) its name denotes
+  };
+  std::vector<Set> sets;
+  std::vector<std::int32_t> set_of_cell;  // per cohesive cell: index into sets, kNoSet or kSeveralSets
+  static constexpr std::int32_t kNoSet = -1, kSeveralSets = -2;
+};
+
+// The cohesive part of a certificate (docs/cohesive-design.md §6.2): check_cohesive's counts
+// and, where the file names sets, the set rules: every cohesive cell in exactly one set,
+// whose name denotes the pair of phases the cell claims (check_cohesive holds the claim to
+// the bulk cells on its facet), and no set empty.
+struct CohesiveSection {
+  std::size_t cells = 0;             // cohesive cells
+  std::size_t interface_facets = 0;  // welded facets between bulk cells of two phases
+  std::size_t nodes = 0;             // in the file (certify's other checks see the welded mesh)
+  struct Count {
+    std::string key, label;
+    std::size_t value = 0;
+  };
+  std::vector<Count> checks;  // every rule, each count an error when above 0
+  bool sets_named = false;    // the file names sets (else `sets` lists the phase pairs claimed)
+  struct SetRow {
+    std::string name;  // empty when the file names no sets
+    std::int32_t lower = 0, upper = 0;  // the pair its name denotes (or the claimed pair); 0: none
+    std::size_t cells = 0;
+  };
+  std::vector<SetRow> sets;
+  std::vector<std::string> examples;  // the first few failures, with ids and positions
+  bool ok() const;
+};
+
+// Checks the cohesive cells of `m` (check_cohesive, with the file's phase ids) and, given
+// the file's sets, the set rules.
+template <int Dim>
+CohesiveSection certify_cohesive(const mesh::SimplexMesh<Dim>& m, const CohesiveSetsInFile* sets);
+
 struct Certificate {
   std::string mesh_source;   // file names for the report ("" if none)
   std::string scene_source;
@@ -45,11 +90,15 @@ struct Certificate {
   ConformityReport conformity;
   std::optional<FidelityReport> fidelity;
   std::optional<PeriodicReport> periodic;  // a periodic scene: its faces match (check_periodic)
+  // A mesh with cohesive cells: the checks above ran on its welded bulk (weld_view), these
+  // on the cohesive cells.
+  std::optional<CohesiveSection> cohesive;
   std::vector<std::string> notes;  // what was not checked and why
 
   bool quality_ok() const { return aspect.above_bound == 0; }
   bool passed() const {
-    return quality_ok() && conformity.ok && (!fidelity || fidelity->ok) && (!periodic || periodic->ok);
+    return quality_ok() && conformity.ok && (!fidelity || fidelity->ok) && (!periodic || periodic->ok) &&
+           (!cohesive || cohesive->ok());
   }
 };
 
