@@ -5,6 +5,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <variant>
 
 #include <unistd.h>
@@ -14,7 +15,11 @@
 #include "progress_line.hpp"
 #include "driver/driver.hpp"
 #include "io/atomic_file.hpp"
+#include "io/mesh_svg.hpp"
+#include "mesh/explode.hpp"
 #include "parallel/collective.hpp"
+#include "parallel/merge.hpp"
+#include "parallel/output.hpp"
 #include "parallel/session.hpp"
 
 namespace cisamr::app {
@@ -27,8 +32,53 @@ struct MeshArgs {
   std::optional<double> svg_at;
   bool gather = false;
   bool fixed_ghost = false;  // the fixed 3-cell inclusion margin instead of the level-aware one
+  std::optional<double> explode;  // --explode F: the regions of the written .vtu moved apart
   driver::Options options;
 };
+
+// --explode needs cohesive cells to show and one .vtu holding every region (the regions of
+// pieces would span ranks). Checked before any work.
+void check_explode(const MeshArgs& args, const driver::Output& output) {
+  if (!args.explode) return;
+  if (!(*args.explode > 1))
+    throw InputError("--explode", "", "must be a number above 1 (1 would leave every region where it is)");
+  if (!args.options.pipeline.cohesive)
+    throw InputError("--explode", "", "needs --cohesive: it moves the phase regions apart to show the cohesive cells");
+  if (output.pieces || (output.format ? *output.format : io::mesh_format_of(output.path)) != io::MeshFormat::vtu)
+    throw InputError("--explode", "", "writes one .vtu file: give -o NAME.vtu (with --gather in a parallel run)");
+}
+
+// The mesh written as driver::write_outputs writes it, but with each region moved by
+// mesh::exploded_coords (on the whole mesh: gathered on rank 0 in a parallel run) and no
+// periodic constraints (an exploded mesh has none). The picture, the report and the summary
+// describe the mesh as meshed.
+template <int Dim>
+void write_exploded(const Comm& comm, driver::MeshRun<Dim>& run, const driver::Output& output,
+                    const std::string& svg, double factor) {
+  ScopedPhase timer(&run.mesh.times, "write");
+  mesh::SimplexMesh<Dim> gathered;
+  if (comm.size() > 1) gathered = parallel::gather_mesh<Dim>(comm, run.mesh.piece);
+  mesh::SimplexMesh<Dim>& whole = comm.size() > 1 ? gathered : run.mesh.piece.mesh;
+  std::vector<double> meshed_coords;
+  if (comm.rank() == 0) meshed_coords = std::exchange(whole.coords, mesh::exploded_coords<Dim>(whole, factor));
+  io::MeshWriteOptions options;
+  options.format = output.format;
+  options.face_box = Box3{};
+  for (int d = 0; d < Dim; ++d) options.face_box->min[d] = run.face_box.min[d], options.face_box->max[d] = run.face_box.max[d];
+  parallel::write_gathered<Dim>(comm, output.path, whole, run.mesh.phases, options);
+  if (comm.rank() == 0) whole.coords = std::move(meshed_coords);
+  if (svg.empty()) return;
+  parallel::run_collectively(comm, [&] {
+    if (comm.rank() != 0) return;
+    geometry::SceneDesc header;  // what the picture needs: phases and domain
+    header.phases = run.mesh.phases;
+    for (int d = 0; d < Dim; ++d) header.domain_min[d] = run.mesh.domain.min[d], header.domain_max[d] = run.mesh.domain.max[d];
+    if constexpr (Dim == 2)
+      io::write_mesh_svg(svg, whole, header);
+    else
+      io::write_mesh_svg(svg, whole, header, run.options.svg_slice);
+  });
+}
 
 void run_mesh(MeshArgs& args, const GlobalFlags& flags, int& exit_code) {
   const Comm& comm = parallel::world();
@@ -58,11 +108,15 @@ void run_mesh(MeshArgs& args, const GlobalFlags& flags, int& exit_code) {
       if (!output.pieces && (output.format ? *output.format : io::mesh_format_of(output.path)) == io::MeshFormat::medit)
         throw InputError(output.path, "", "--cohesive: Medit .mesh cannot hold cohesive elements; write .vtu, .msh or .inp");
     });
+  parallel::run_collectively(comm, [&] { check_explode(args, output); });
   auto meshed = driver::mesh_scene(comm, args.scene, options);
   std::visit(
       [&](auto& run) {
         io::OutputSet outputs;  // the mesh, its pieces, the picture and the report, or none of them
-        driver::write_outputs(comm, run, output, args.svg);
+        if (args.explode)
+          write_exploded(comm, run, output, args.svg, *args.explode);
+        else
+          driver::write_outputs(comm, run, output, args.svg);
         driver::finish(comm, run);
         if (!args.report.empty())
           parallel::run_collectively(comm, [&] {
@@ -128,6 +182,10 @@ void add_mesh_command(CLI::App& app, GlobalFlags& flags, int& exit_code) {
   cmd->add_flag("--cohesive", args->options.pipeline.cohesive,
                 "Zero-thickness cohesive elements on every interface between phases (COH2D4/COH3D6 in .inp, "
                 "quads/prisms in .msh, quads/wedges in .vtu), interface nodes split per phase");
+  cmd->add_option("--explode", args->explode,
+                  "With --cohesive and a .vtu output: move each phase region away from the domain centre by (F-1) "
+                  "times its centroid's offset, so that the cohesive cells show (for viewing only)")
+      ->check(number_in(1, 1e6));
   cmd->add_flag("--gather", args->gather,
                 "Parallel run: write one file on rank 0 (any format) instead of .pvtu pieces");
   cmd->add_flag("--fixed-ghost", args->fixed_ghost,
