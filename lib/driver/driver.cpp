@@ -257,9 +257,11 @@ void write_outputs(const Comm& comm, MeshRun<Dim>& run, const Output& output, co
     options.periodic[static_cast<std::size_t>(d)] = run.periodic[static_cast<std::size_t>(d)];
     options.period[static_cast<std::size_t>(d)] = run.period[d];
   }
+  options.periodic_voids = std::ranges::any_of(run.mesh.phases, [](const geometry::Phase& p) { return p.is_void; });
   if (output.pieces && run.any_periodic()) {  // the masters of this rank's slaves, from any rank
     ScopedPhase exchange(&run.mesh.times, "periodic");
-    options.periodic_master = parallel::periodic_masters<Dim>(comm, piece.mesh, run.face_box, run.periodic);
+    options.periodic_master =
+        parallel::periodic_masters<Dim>(comm, piece.mesh, run.face_box, run.periodic, options.periodic_voids);
   }
   if (output.pieces)
     parallel::write_pvtu<Dim>(comm, output.path, piece.mesh, run.mesh.phases, options);

@@ -72,6 +72,9 @@ struct MeshWriteOptions {
   // caller gives, per node, the full master's global id or -1 (parallel::periodic_masters),
   // and write_vtu writes it as periodic_master. Empty: the links are taken from the mesh.
   std::vector<GlobalId> periodic_master;
+  // The scene has void phases: a node on a max face whose translate is absent (a void across
+  // the period) is left unconstrained instead of refused (mesh::periodic_links).
+  bool periodic_voids = false;
   bool any_periodic() const { return periodic[0] || periodic[1] || periodic[2]; }
 };
 

@@ -181,7 +181,7 @@ PeriodicOutput<Dim> periodic_output(const mesh::SimplexMesh<Dim>& m, const MeshW
     const double t = options.period[static_cast<std::size_t>(a)];
     out.period[static_cast<std::size_t>(a)] = t != 0 ? t : out.faces.max[a] - out.faces.min[a];
   }
-  out.links = mesh::periodic_links<Dim>(m, out.faces, out.axes);
+  out.links = mesh::periodic_links<Dim>(m, out.faces, out.axes, options.periodic_voids);
   return out;
 }
 
@@ -639,10 +639,13 @@ void write_msh_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m,
       }
       out << '\n';
       std::size_t pairs = 0;
-      for (const mesh::PeriodicSlave<Dim>& s : periodic.links.slaves) pairs += (s.shift >> a) & 1;
+      const auto paired = [a](const mesh::PeriodicSlave<Dim>& s) {
+        return ((s.shift >> a) & 1) && s.axis_master[static_cast<std::size_t>(a)] >= 0;
+      };
+      for (const mesh::PeriodicSlave<Dim>& s : periodic.links.slaves) pairs += paired(s);
       out.integer(static_cast<long long>(pairs)) << '\n';
       for (const mesh::PeriodicSlave<Dim>& s : periodic.links.slaves)
-        if ((s.shift >> a) & 1) {
+        if (paired(s)) {
           out.integer(s.node + 1LL) << ' ';
           out.integer(s.axis_master[static_cast<std::size_t>(a)] + 1LL) << '\n';
         }

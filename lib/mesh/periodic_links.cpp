@@ -45,7 +45,8 @@ std::string axes_text(std::uint8_t shift) {
 }  // namespace
 
 template <int Dim>
-PeriodicLinks<Dim> periodic_links(const SimplexMesh<Dim>& m, const Box<Dim>& faces, const std::array<bool, Dim>& axes) {
+PeriodicLinks<Dim> periodic_links(const SimplexMesh<Dim>& m, const Box<Dim>& faces, const std::array<bool, Dim>& axes,
+                                  bool voids) {
   using Key = PeriodicKey<Dim>;
   PeriodicLinks<Dim> links;
   links.axes = axes;
@@ -74,6 +75,7 @@ PeriodicLinks<Dim> periodic_links(const SimplexMesh<Dim>& m, const Box<Dim>& fac
     const double* p = &m.coords[static_cast<std::size_t>(s.node) * Dim];
     const auto it = on_min.find(periodic_key<Dim>(p, faces, moved, periodic_phase(m, static_cast<std::size_t>(s.node))));
     if (it != on_min.end()) return it->second;
+    if (voids) return LocalId{-1};
     std::string where;
     for (int a = 0; a < Dim; ++a) {
       char buf[32];
@@ -91,10 +93,15 @@ PeriodicLinks<Dim> periodic_links(const SimplexMesh<Dim>& m, const Box<Dim>& fac
       if ((s.shift >> a) & 1) s.axis_master[static_cast<std::size_t>(a)] = find(s, static_cast<std::uint8_t>(1u << a));
     s.master = find(s, s.shift);
   }
+  if (voids) {
+    for (const PeriodicSlave<Dim>& s : links.slaves)
+      if (s.master < 0) links.unpaired.push_back(s.node);
+    std::erase_if(links.slaves, [](const PeriodicSlave<Dim>& s) { return s.master < 0; });
+  }
   return links;
 }
 
-template PeriodicLinks<2> periodic_links<2>(const SimplexMesh<2>&, const Box<2>&, const std::array<bool, 2>&);
-template PeriodicLinks<3> periodic_links<3>(const SimplexMesh<3>&, const Box<3>&, const std::array<bool, 3>&);
+template PeriodicLinks<2> periodic_links<2>(const SimplexMesh<2>&, const Box<2>&, const std::array<bool, 2>&, bool);
+template PeriodicLinks<3> periodic_links<3>(const SimplexMesh<3>&, const Box<3>&, const std::array<bool, 3>&, bool);
 
 }  // namespace cisamr::mesh

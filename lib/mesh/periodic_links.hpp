@@ -41,6 +41,9 @@ template <int Dim>
 struct PeriodicLinks {
   std::array<bool, Dim> axes{};
   std::vector<PeriodicSlave<Dim>> slaves;  // ascending node
+  // With `voids`: nodes on a max face with no node at their full translate (only void cells
+  // touch it across the period: the material there is a free surface, no constraint).
+  std::vector<LocalId> unpaired;
   std::size_t slave_count() const { return slaves.size(); }
 };
 
@@ -48,11 +51,14 @@ struct PeriodicLinks {
 // coordinates of the nodes on the faces: driver::face_box) along the periodic `axes`.
 // With cohesive cells (node_phase set) masters are matched per phase. A slave without its
 // single-axis or full master, or two nodes on a min face at the same position (and phase), throws MeshingError naming the node (global id when the mesh has them, else its
-// index) and its coordinates: the mesh is not periodic. O(n) expected (one hash table of the
-// min-face nodes). Needs the whole mesh: a piece of a parallel run may lack masters
+// index) and its coordinates: the mesh is not periodic. With `voids` (the scene has void
+// phases) a node whose translate is absent is legitimate: a void fills the other side, its
+// material meets the void across the period. It is then not a slave (`unpaired`), and a
+// missing single-axis master is -1. O(n) expected (one hash table of the min-face nodes). Needs the whole mesh: a piece of a parallel run may lack masters
 // (parallel::periodic_masters resolves those).
 template <int Dim>
-PeriodicLinks<Dim> periodic_links(const SimplexMesh<Dim>& m, const Box<Dim>& faces, const std::array<bool, Dim>& axes);
+PeriodicLinks<Dim> periodic_links(const SimplexMesh<Dim>& m, const Box<Dim>& faces, const std::array<bool, Dim>& axes,
+                                  bool voids = false);
 
 // The helpers the links (and lib/parallel's exchange) are made of.
 // Bit pattern of one coordinate as it is matched: -0.0 as +0.0.

@@ -36,7 +36,7 @@ void write_pvtu(const Comm& comm, const std::string& pvtu_path, const mesh::Simp
       axes[static_cast<std::size_t>(d)] = options.periodic[static_cast<std::size_t>(d)];
     }
     piece_options = options;
-    piece_options.periodic_master = periodic_masters<Dim>(comm, piece, faces, axes);
+    piece_options.periodic_master = periodic_masters<Dim>(comm, piece, faces, axes, options.periodic_voids);
     used = &piece_options;
   }
   run_collectively(comm, [&] {

@@ -45,7 +45,7 @@ using namespace periodic_detail;
 
 template <int Dim>
 std::vector<GlobalId> periodic_masters(const Comm& comm, const mesh::SimplexMesh<Dim>& piece, const Box<Dim>& faces,
-                                       const std::array<bool, Dim>& axes) {
+                                       const std::array<bool, Dim>& axes, bool voids) {
   using Key = mesh::PeriodicKey<Dim>;
   const int size = comm.size();
   const std::size_t nodes = piece.node_count();
@@ -126,7 +126,7 @@ std::vector<GlobalId> periodic_masters(const Comm& comm, const mesh::SimplexMesh
       Unpacker u(received[static_cast<std::size_t>(r)]);
       for (std::size_t n : asked[static_cast<std::size_t>(r)]) {
         master[n] = u.get<std::int64_t>();
-        if (master[n] >= 0) continue;
+        if (master[n] >= 0 || voids) continue;
         const double* p = &piece.coords[n * Dim];
         std::array<double, Dim> moved;
         const std::uint8_t shift = mesh::periodic_shift<Dim>(p, faces, axes);
@@ -142,8 +142,8 @@ std::vector<GlobalId> periodic_masters(const Comm& comm, const mesh::SimplexMesh
 }
 
 template std::vector<GlobalId> periodic_masters<2>(const Comm&, const mesh::SimplexMesh<2>&, const Box<2>&,
-                                                   const std::array<bool, 2>&);
+                                                   const std::array<bool, 2>&, bool);
 template std::vector<GlobalId> periodic_masters<3>(const Comm&, const mesh::SimplexMesh<3>&, const Box<3>&,
-                                                   const std::array<bool, 3>&);
+                                                   const std::array<bool, 3>&, bool);
 
 }  // namespace cisamr::parallel

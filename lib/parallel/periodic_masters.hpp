@@ -19,10 +19,12 @@ namespace cisamr::parallel {
 // Collective. Per node of this rank's `piece` (node_global_id set, or the node index),
 // the global id of its full periodic master, or -1 for a node on no periodic max face.
 // `faces`: the whole domain's face box (driver::face_box). A slave whose master no rank
-// holds throws MeshingError naming the slave and its coordinates, on every rank.
+// holds throws MeshingError naming the slave and its coordinates, on every rank; with
+// `voids` (the scene has void phases) it gets -1 (a void across the period: no constraint,
+// as mesh::periodic_links).
 // Cost: one alltoallv of the nodes on periodic faces, and one of the answers.
 template <int Dim>
 std::vector<GlobalId> periodic_masters(const Comm& comm, const mesh::SimplexMesh<Dim>& piece, const Box<Dim>& faces,
-                                       const std::array<bool, Dim>& axes);
+                                       const std::array<bool, Dim>& axes, bool voids = false);
 
 }  // namespace cisamr::parallel

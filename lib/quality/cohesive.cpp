@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <bit>
 #include <compare>
+#include <limits>
 #include <numeric>
 #include <span>
 
@@ -76,11 +77,12 @@ enum CellFlag : std::uint8_t {
 
 }  // namespace
 
+namespace {
+
+// Welds the nodes whose `key`s (Dim per node) are equal; weld_view's contract.
 template <int Dim>
-WeldedMesh<Dim> weld_view(const mesh::SimplexMesh<Dim>& m) {
+WeldedMesh<Dim> weld_by(const mesh::SimplexMesh<Dim>& m, const std::vector<std::uint64_t>& key) {
   const std::size_t nodes = m.node_count();
-  std::vector<std::uint64_t> key(nodes * Dim);
-  for (std::size_t i = 0; i < key.size(); ++i) key[i] = position_bits(m.coords[i]);
   std::vector<LocalId> order(nodes);
   std::iota(order.begin(), order.end(), LocalId{0});
   std::sort(order.begin(), order.end(), [&](LocalId a, LocalId b) {
@@ -120,14 +122,46 @@ WeldedMesh<Dim> weld_view(const mesh::SimplexMesh<Dim>& m) {
   return w;
 }
 
+}  // namespace
+
 template <int Dim>
-CohesiveReport<Dim> check_cohesive(const mesh::SimplexMesh<Dim>& m) {
+WeldedMesh<Dim> weld_view(const mesh::SimplexMesh<Dim>& m) {
+  std::vector<std::uint64_t> key(m.coords.size());
+  for (std::size_t i = 0; i < key.size(); ++i) key[i] = position_bits(m.coords[i]);
+  return weld_by(m, key);
+}
+
+template <int Dim>
+CohesiveReport<Dim> check_cohesive(const mesh::SimplexMesh<Dim>& m, const CohesivePeriodicity<Dim>* periodic) {
   constexpr int C = 2 * Dim;
   CohesiveReport<Dim> r;
   const std::size_t nodes = m.node_count();
   const WeldedMesh<Dim> welded = weld_view(m);
   const std::vector<LocalId>& cls = welded.class_of;
-  const std::vector<bool> valid = detail::valid_cells(welded.mesh);  // same cells as in m
+  // The torus: max-face positions welded with their min-face translates (periodic only).
+  bool any_axis = false;
+  if (periodic != nullptr)
+    for (bool a : periodic->axes) any_axis = any_axis || a;
+  const auto max_face_axes = [&](LocalId n) {  // bit a: n lies on the max face of periodic axis a
+    unsigned bits = 0;
+    if (any_axis)
+      for (int a = 0; a < Dim; ++a)
+        if (periodic->axes[static_cast<std::size_t>(a)] && m.point(n)[a] == periodic->faces.max[a]) bits |= 1u << a;
+    return bits;
+  };
+  WeldedMesh<Dim> torus_weld;
+  if (any_axis) {
+    std::vector<std::uint64_t> key(m.coords.size());
+    for (std::size_t n = 0; n < nodes; ++n) {
+      const unsigned on_max = max_face_axes(LocalId(n));
+      for (int a = 0; a < Dim; ++a)
+        key[n * Dim + a] = position_bits((on_max >> a) & 1 ? periodic->faces.min[a] : m.coords[n * Dim + a]);
+    }
+    torus_weld = weld_by(m, key);
+  }
+  const WeldedMesh<Dim>& torus = any_axis ? torus_weld : welded;
+  const std::vector<LocalId>& tcls = torus.class_of;
+  const std::vector<bool> valid = detail::valid_cells(torus.mesh);  // same cells as in m
 
   // ---- the phases of each node's bulk cells ----------------------------------------------
   enum : std::uint8_t { kUnused, kOnePhase, kMixed };
@@ -211,7 +245,7 @@ CohesiveReport<Dim> check_cohesive(const mesh::SimplexMesh<Dim>& m) {
     const LocalId* t = b + Dim;
     Bottom e{{}, c};
     for (int k = 0; k < Dim; ++k) {
-      e.key[k] = cls[b[k]];
+      e.key[k] = tcls[b[k]];
       if (cls[t[k]] != cls[b[k]]) flags[c] |= kNotCoincident;
     }
     std::sort(e.key.begin(), e.key.end());
@@ -231,17 +265,41 @@ CohesiveReport<Dim> check_cohesive(const mesh::SimplexMesh<Dim>& m) {
       return;
     }
     const LocalId* b = coh.cell(c);
-    if (ph0 != p || sorted_ids<Dim>(b) != facet_ids(m, lower.cell, lower.local) ||
-        sorted_ids<Dim>(b + Dim) != facet_ids(m, upper.cell, upper.local))
+    // A side is right when its ids are its cell's facet nodes, or (periodic) when that
+    // cell's facet lies on a max face and the side holds the copies of that cell's phase at
+    // the translates: then the apex is moved back by the period. One side must be the former.
+    const auto phase_of_node = [&](LocalId n) {
+      if (!m.node_phase.empty() && static_cast<std::size_t>(n) < m.node_phase.size()) return m.node_phase[n];
+      return state[n] == kOnePhase ? phase_of[n] : std::numeric_limits<std::int32_t>::min();
+    };
+    const auto side = [&](const LocalId* ids, const detail::FacetUse& use, Vec<Dim>& apex) {
+      apex = m.point(m.cell(use.cell)[use.local]);
+      if (sorted_ids<Dim>(ids) == facet_ids(m, use.cell, use.local)) return 1;  // near
+      if (!any_axis) return 0;
+      unsigned shift = ~0u;
+      for (int k = 0; k < Dim; ++k) shift &= max_face_axes(m.cell(use.cell)[detail::FacetTable<Dim>::local[use.local][k]]);
+      if (shift == 0) return 0;
+      for (int k = 0; k < Dim; ++k) {
+        const LocalId n = ids[k];
+        if (phase_of_node(n) != m.cell_phase[use.cell] || (max_face_axes(n) & shift) != 0) return 0;
+      }
+      for (int a = 0; a < Dim; ++a)
+        if ((shift >> a) & 1) apex[a] -= periodic->faces.max[a] - periodic->faces.min[a];
+      return 2;  // across the plane
+    };
+    Vec<Dim> apex_lower, apex_upper;
+    const int bottom_side = ph0 == p ? side(b, lower, apex_lower) : 0;
+    const int top_side = ph0 == p ? side(b + Dim, upper, apex_upper) : 0;
+    if (bottom_side == 0 || top_side == 0 || (bottom_side == 2 && top_side == 2)) {
       flags[c] |= kWrongSides;
-    const Vec<Dim> apex_lower = m.point(m.cell(lower.cell)[lower.local]);
-    const Vec<Dim> apex_upper = m.point(m.cell(upper.cell)[upper.local]);
+      return;
+    }
     if (!(orient<Dim>(m, b, apex_upper) > 0 && orient<Dim>(m, b, apex_lower) < 0)) flags[c] |= kWrongOrientation;
   };
 
   const auto by_key = [](const Bottom& e, const detail::FacetNodes<Dim>& k) { return e.key < k; };
   detail::for_each_facet<Dim>(
-      welded.mesh, valid, [&](const detail::FacetNodes<Dim>& key, std::span<const detail::FacetUse> uses) {
+      torus.mesh, valid, [&](const detail::FacetNodes<Dim>& key, std::span<const detail::FacetUse> uses) {
         const auto first = std::lower_bound(bottoms.begin(), bottoms.end(), key, by_key);
         auto last = first;
         while (last != bottoms.end() && last->key == key) ++last;
@@ -310,7 +368,7 @@ template struct CohesiveReport<2>;
 template struct CohesiveReport<3>;
 template WeldedMesh<2> weld_view<2>(const mesh::SimplexMesh<2>&);
 template WeldedMesh<3> weld_view<3>(const mesh::SimplexMesh<3>&);
-template CohesiveReport<2> check_cohesive<2>(const mesh::SimplexMesh<2>&);
-template CohesiveReport<3> check_cohesive<3>(const mesh::SimplexMesh<3>&);
+template CohesiveReport<2> check_cohesive<2>(const mesh::SimplexMesh<2>&, const CohesivePeriodicity<2>*);
+template CohesiveReport<3> check_cohesive<3>(const mesh::SimplexMesh<3>&, const CohesivePeriodicity<3>*);
 
 }  // namespace cisamr::quality

@@ -6,6 +6,7 @@
 // the one rule the weld and every check here use), and the orientation signs come from
 // bulk cells that check_conformity requires to be far from degenerate.
 #include <cstddef>
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -97,11 +98,27 @@ struct CohesiveReport {
   std::string summary() const;
 };
 
-// Checks the cohesive cells and the node copies of a non-periodic mesh (any mesh: one
-// without cohesive cells passes when no two phases meet). O(n log n) in the mesh size:
-// one sort of the nodes by position, the facet table of the welded mesh, one sort of the
-// cohesive cells by their welded bottom.
+// A periodic mesh's frame: the exact coordinates of its faces and its periodic axes.
 template <int Dim>
-CohesiveReport<Dim> check_cohesive(const mesh::SimplexMesh<Dim>& m);
+struct CohesivePeriodicity {
+  Box<Dim> faces;
+  std::array<bool, Dim> axes{};
+};
+
+// Checks the cohesive cells and the node copies of a mesh (any mesh: one without cohesive
+// cells passes when no two phases meet). O(n log n) in the mesh size: one sort of the nodes
+// by position, the facet table of the welded mesh, one sort of the cohesive cells by their
+// welded bottom.
+//
+// With `periodic`, facets are also matched across the periodic planes: a node on a max face
+// is welded with its translate on the min face (the max-face coordinate replaced by the
+// min face's, exactly), so a facet on a periodic plane has a cell on each side and is an
+// interface when their phases differ. Its cohesive cell must sit at one side's facet
+// (that side's node ids, as everywhere) with, for the cell across the plane, the copies of
+// that cell's phase at the translates of its facet nodes (its periodic masters; node_phase
+// says a copy's phase when no bulk cell uses it); the orientation rule uses that cell's apex
+// moved back by the period.
+template <int Dim>
+CohesiveReport<Dim> check_cohesive(const mesh::SimplexMesh<Dim>& m, const CohesivePeriodicity<Dim>* periodic = nullptr);
 
 }  // namespace cisamr::quality

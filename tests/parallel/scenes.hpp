@@ -109,11 +109,11 @@ struct RunOutcome {
   DistributedMesh2 distributed;
 };
 
-inline RunOutcome run_sequential(const geometry::SceneDesc& scene) {
+inline RunOutcome run_sequential(const geometry::SceneDesc& scene, const pipeline::Options& options = {}) {
   RunOutcome out;
   try {
     const geometry::Oracle2 oracle(scene);
-    out.mesh = pipeline::mesh(oracle).mesh;
+    out.mesh = pipeline::mesh(oracle, options).mesh;
     out.checksum = mesh_checksum2(out.mesh);
   } catch (const std::exception& e) {
     out.failed = true;
@@ -124,11 +124,12 @@ inline RunOutcome run_sequential(const geometry::SceneDesc& scene) {
 
 // Collective: every rank must call it with the same arguments.
 inline RunOutcome run_parallel(const Comm& comm, const geometry::SceneDesc& scene, int partitions,
-                               const GhostRule& rule) {
+                               const GhostRule& rule, const pipeline::Options& pipeline = {}) {
   RunOutcome out;
   MeshOptions options;
   options.partitions = partitions;
   options.ghost = rule;
+  options.pipeline = pipeline;
   try {
     out.distributed = mesh_distributed<2>(comm, scene, options);
     out.checksum = mesh_checksum2(comm, out.distributed.piece.mesh);

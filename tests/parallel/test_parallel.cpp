@@ -13,6 +13,7 @@
 #include "parallel/collective.hpp"
 #include "parallel/output.hpp"
 #include "scenes.hpp"
+#include "support/cohesive_compare.hpp"
 #include "quality/quality.hpp"
 
 namespace cisamr::parallel {
@@ -238,6 +239,96 @@ TEST(Invariance, GhostRegionsArePartial) {
 TEST_P(Invariance, DataExample) {
   const geometry::SceneDesc scene = io::read_scene(CISAMR_SOURCE_DIR "/data/examples/composite.json");
   expect_invariant(scene, GetParam(), true, false);
+}
+
+// Cohesive cells (issue 13): the same cells and copies for 1, 7 and 13 partitions, each
+// interface facet covered once in the gathered mesh, across partition faces and periodic
+// planes (facets there are paired between partitions), one global id per copy.
+std::int64_t expect_cohesive_invariant(const geometry::SceneDesc& scene, int partitions) {
+  pipeline::Options options;
+  options.cohesive = true;
+  const testing::RunOutcome seq = testing::run_sequential(scene, options);
+  const testing::RunOutcome par = testing::run_parallel(kSerial, scene, partitions, GhostRule{}, options);
+  EXPECT_EQ(seq.failed, par.failed) << seq.error << " | " << par.error;
+  if (seq.failed || par.failed) return 0;
+  EXPECT_EQ(par.checksum, seq.checksum);
+  EXPECT_EQ(mesh_checksum2(par.mesh), seq.checksum);
+  EXPECT_EQ(par.mesh.node_count(), seq.mesh.node_count());
+  EXPECT_EQ(par.mesh.cohesive.count(), seq.mesh.cohesive.count());
+  const auto frame = cisamr::testing::cohesive_frame<2>(scene, pipeline::make_lattice<2>(scene, options));
+  const bool voids = std::ranges::any_of(scene.phases, [](const geometry::Phase& p) { return p.is_void; });
+  EXPECT_TRUE(cisamr::testing::cohesive_mesh_is_right(seq.mesh, frame, voids));
+  EXPECT_TRUE(cisamr::testing::cohesive_mesh_is_right(par.mesh, frame, voids));
+  std::vector<char> seen(static_cast<std::size_t>(par.distributed.piece.global_nodes), 0);
+  for (GlobalId g : par.distributed.piece.mesh.node_global_id) seen[static_cast<std::size_t>(g)]++;
+  for (char s : seen) EXPECT_EQ(s, 1);
+  return static_cast<std::int64_t>(par.mesh.cohesive.count());
+}
+
+TEST_P(Invariance, CohesiveScenes) {
+  std::int64_t cells = expect_cohesive_invariant(testing::corner_scene(), GetParam());
+  for (unsigned seed = 1; seed <= 8; ++seed) {
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    cells += expect_cohesive_invariant(testing::random_scene(seed), GetParam());
+  }
+  for (unsigned seed = 1; seed <= 4; ++seed) {
+    SCOPED_TRACE("periodic seed " + std::to_string(seed));
+    cells += expect_cohesive_invariant(cisamr::testing::periodic_scene(seed), GetParam());
+  }
+  EXPECT_GT(cells, 1000);
+}
+
+// Interfaces lying on the periodic planes: boxes with a side on x = 0 and y = 0 of a
+// periodic domain, matrix across the period, a third phase at the corner; a disc across
+// the y faces. The cells on the planes are made by the join of the min- and max-side
+// facets, once, at the min face; the checker catches one of them removed.
+geometry::SceneDesc periodic_plane_scene() {
+  using namespace geometry;
+  SceneDesc s;
+  s.source = "periodic-plane-scene";
+  s.dimension = 2;
+  s.domain_min = {0, 0, 0};
+  s.domain_max = {16, 12, 0};
+  s.periodic = {true, true, false};
+  s.h = 1;
+  s.levels = 2;
+  s.phases = {{1, "matrix", false}, {2, "box", false}, {3, "corner", false}};
+  const auto add = [&](Shape shape, int phase) {
+    Inclusion inc;
+    inc.shape = std::move(shape);
+    inc.phase = phase;
+    inc.levels = 2;
+    s.inclusions.push_back(std::move(inc));
+  };
+  add(Polygon{{{0, 3}, {3.5, 3}, {3.5, 7}, {0, 7}}}, 2);
+  add(Polygon{{{0, 0}, {2, 0}, {2, 1}, {0, 1}}}, 3);
+  add(Circle{{9.3, 11.6}, 1.7}, 3);
+  return s;
+}
+
+TEST_P(Invariance, CohesiveCellsOnPeriodicPlanes) {
+  const geometry::SceneDesc scene = periodic_plane_scene();
+  expect_cohesive_invariant(scene, GetParam());
+  pipeline::Options options;
+  options.cohesive = true;
+  const testing::RunOutcome par = testing::run_parallel(kSerial, scene, GetParam(), GhostRule{}, options);
+  ASSERT_FALSE(par.failed) << par.error;
+  const auto frame = cisamr::testing::cohesive_frame<2>(scene, pipeline::make_lattice<2>(scene, options));
+  // Box 2 on x = 0 (4 units at level 2: 16 edges), box 3 on x = 0 (4) and y = 0 (8).
+  EXPECT_EQ(cisamr::testing::cohesive_cells_on_periodic_planes(par.mesh, frame), 28);
+  mesh::Mesh2 broken = par.mesh;
+  for (std::size_t c = 0; c < broken.cohesive.count(); ++c)
+    if (broken.point(broken.cohesive.cell(c)[0])[0] == 0 && broken.point(broken.cohesive.cell(c)[1])[0] == 0) {
+      broken.cohesive.nodes.erase(broken.cohesive.nodes.begin() + static_cast<std::ptrdiff_t>(4 * c),
+                                  broken.cohesive.nodes.begin() + static_cast<std::ptrdiff_t>(4 * c + 4));
+      broken.cohesive.phase.erase(broken.cohesive.phase.begin() + static_cast<std::ptrdiff_t>(2 * c),
+                                  broken.cohesive.phase.begin() + static_cast<std::ptrdiff_t>(2 * c + 2));
+      broken.cohesive.partition.erase(broken.cohesive.partition.begin() + static_cast<std::ptrdiff_t>(c));
+      break;
+    }
+  const auto r = quality::check_cohesive<2>(broken, &frame);
+  EXPECT_EQ(r.uncovered.count, 1u) << r.summary();
+  EXPECT_EQ(quality::check_cohesive<2>(broken).uncovered.count, 0u);  // not seen without the period
 }
 
 INSTANTIATE_TEST_SUITE_P(OneRank, Invariance, ::testing::Values(1, 7, 13));

@@ -14,6 +14,7 @@
 #include "core/error.hpp"
 #include <functional>
 #include <optional>
+#include "support/cohesive_compare.hpp"
 #include "support/cohesive_split.hpp"
 #include "support/random_scenes.hpp"
 
@@ -212,7 +213,7 @@ Box2 face_box(const geometry::SceneDesc& s) {
 class PeriodicScenes2 : public ::testing::TestWithParam<unsigned> {};
 
 TEST_P(PeriodicScenes2, FacesMatchAndTheMeshIsCertified) {
-  std::int64_t matched_facets = 0, images = 0;
+  std::int64_t matched_facets = 0, images = 0, cohesive_cells = 0;
   const unsigned first_seed = GetParam();
   for (unsigned seed = first_seed; seed < first_seed + 20; ++seed) {
     SCOPED_TRACE("seed " + std::to_string(seed));
@@ -230,8 +231,11 @@ TEST_P(PeriodicScenes2, FacesMatchAndTheMeshIsCertified) {
       matched_facets += a.max_facets;
     }
     // A non-periodic axis keeps the clipped geometry: its faces need not match.
+    // Cohesive cells (issue 13) on the periodic mesh, checked independently.
+    EXPECT_TRUE(testing::cohesive_whole_is_right(result, scene, &cohesive_cells));
   }
   EXPECT_GT(matched_facets, 200);
+  EXPECT_GT(cohesive_cells, 1000);
   EXPECT_GT(images, 20);  // inclusions do cross the faces
 }
 

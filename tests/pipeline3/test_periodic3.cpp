@@ -15,6 +15,7 @@
 #include "geometry/oracle.hpp"
 #include "grid/tet_lattice.hpp"
 #include "io/stl_io.hpp"
+#include "support/cohesive_compare.hpp"
 #include "mesh/metrics.hpp"
 #include "pipeline/pipeline.hpp"
 #include "quality/periodic.hpp"
@@ -57,7 +58,7 @@ std::function<bool(const Vec3&)> in_void(const geometry::Oracle3& oracle) {
 }
 
 struct Totals {
-  std::int64_t matched_facets = 0, images = 0, swaps = 0, collapsed = 0, scenes = 0;
+  std::int64_t matched_facets = 0, images = 0, swaps = 0, collapsed = 0, scenes = 0, cohesive_cells = 0;
   double worst = 0;
 };
 
@@ -115,6 +116,8 @@ void check_scene(std::uint64_t seed, Totals& totals) {
   }
   totals.swaps += r.counters.face_swaps;
   totals.collapsed += r.counters.collapsed_nodes;
+  // Cohesive cells (issue 13) on the periodic mesh, checked independently.
+  EXPECT_TRUE(testing::cohesive_whole_is_right(r, scene, &totals.cohesive_cells));
 }
 
 class PeriodicScenes3 : public ::testing::TestWithParam<unsigned> {};
@@ -130,6 +133,7 @@ TEST_P(PeriodicScenes3, FacesMatchAndTheMeshIsCertified) {
   EXPECT_GE(totals.scenes, 15);
   EXPECT_GT(totals.images, 10);  // inclusions do cross the faces
   EXPECT_GT(totals.matched_facets, 1000);
+  EXPECT_GT(totals.cohesive_cells, 1000);
 }
 
 // One scene by seed (CISAMR_SEED), for debugging; skipped otherwise.
