@@ -98,6 +98,34 @@ inline geometry::SceneDesc sparse_random_scene(unsigned seed) {
   return s;
 }
 
+// Interfaces lying on the periodic planes: boxes with a side on x = 0 and y = 0 of a
+// periodic domain, matrix across the period, a third phase at the corner; a disc across
+// the y faces. The cells on the planes are made by the join of the min- and max-side
+// facets, once, at the min face; the checker catches one of them removed.
+inline geometry::SceneDesc periodic_plane_scene() {
+  using namespace geometry;
+  SceneDesc s;
+  s.source = "periodic-plane-scene";
+  s.dimension = 2;
+  s.domain_min = {0, 0, 0};
+  s.domain_max = {16, 12, 0};
+  s.periodic = {true, true, false};
+  s.h = 1;
+  s.levels = 2;
+  s.phases = {{1, "matrix", false}, {2, "box", false}, {3, "corner", false}};
+  const auto add = [&](Shape shape, int phase) {
+    Inclusion inc;
+    inc.shape = std::move(shape);
+    inc.phase = phase;
+    inc.levels = 2;
+    s.inclusions.push_back(std::move(inc));
+  };
+  add(Polygon{{{0, 3}, {3.5, 3}, {3.5, 7}, {0, 7}}}, 2);
+  add(Polygon{{{0, 0}, {2, 0}, {2, 1}, {0, 1}}}, 3);
+  add(Circle{{9.3, 11.6}, 1.7}, 3);
+  return s;
+}
+
 // Random scenes of the pipeline's property tests (every shape, voids, tangencies, tiny ones).
 inline geometry::SceneDesc random_scene(unsigned seed) { return cisamr::testing::RandomScene2(seed).make(); }
 

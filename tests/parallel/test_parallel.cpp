@@ -278,36 +278,8 @@ TEST_P(Invariance, CohesiveScenes) {
   EXPECT_GT(cells, 1000);
 }
 
-// Interfaces lying on the periodic planes: boxes with a side on x = 0 and y = 0 of a
-// periodic domain, matrix across the period, a third phase at the corner; a disc across
-// the y faces. The cells on the planes are made by the join of the min- and max-side
-// facets, once, at the min face; the checker catches one of them removed.
-geometry::SceneDesc periodic_plane_scene() {
-  using namespace geometry;
-  SceneDesc s;
-  s.source = "periodic-plane-scene";
-  s.dimension = 2;
-  s.domain_min = {0, 0, 0};
-  s.domain_max = {16, 12, 0};
-  s.periodic = {true, true, false};
-  s.h = 1;
-  s.levels = 2;
-  s.phases = {{1, "matrix", false}, {2, "box", false}, {3, "corner", false}};
-  const auto add = [&](Shape shape, int phase) {
-    Inclusion inc;
-    inc.shape = std::move(shape);
-    inc.phase = phase;
-    inc.levels = 2;
-    s.inclusions.push_back(std::move(inc));
-  };
-  add(Polygon{{{0, 3}, {3.5, 3}, {3.5, 7}, {0, 7}}}, 2);
-  add(Polygon{{{0, 0}, {2, 0}, {2, 1}, {0, 1}}}, 3);
-  add(Circle{{9.3, 11.6}, 1.7}, 3);
-  return s;
-}
-
 TEST_P(Invariance, CohesiveCellsOnPeriodicPlanes) {
-  const geometry::SceneDesc scene = periodic_plane_scene();
+  const geometry::SceneDesc scene = testing::periodic_plane_scene();
   expect_cohesive_invariant(scene, GetParam());
   pipeline::Options options;
   options.cohesive = true;

@@ -14,6 +14,7 @@
 #include "parallel/exchange.hpp"
 #include "parallel/session.hpp"
 #include "scenes3.hpp"
+#include "support/cohesive_compare.hpp"
 
 namespace cisamr::parallel {
 namespace {
@@ -69,6 +70,36 @@ TEST(MpiInvariance3, DenseScenes) {
       pipeline::Counters<3>::for_each([&](const char* name, auto member, pipeline::Reduction) {
         EXPECT_EQ(par.distributed.counters.*member, one.distributed.counters.*member) << name;
       });
+    }
+  }
+}
+
+// Cohesive cells (issue 13) under MPI: the sequential mesh's cells and copies (checksum),
+// every interface facet covered once in the gathered mesh, and the copies' global ids those
+// of one rank with the same partitions.
+TEST(MpiInvariance3, CohesiveScenes) {
+  for (const auto& c : testing::invariance_cases3()) {
+    if (c.name != "periodic-level0" && c.name != "contact") continue;
+    pipeline::Options options = c.options;
+    options.cohesive = true;
+    const testing::RunOutcome3 seq = root() ? testing::run_sequential3(c.scene, options) : testing::RunOutcome3{};
+    const std::uint64_t expected = from_root(seq.checksum);
+    for (int n : partition_counts()) {
+      SCOPED_TRACE(c.name + ", " + std::to_string(comm().size()) + " ranks, " + std::to_string(n) + " partitions");
+      const testing::RunOutcome3 par = testing::run_parallel3(comm(), c.scene, n, {}, options);
+      EXPECT_FALSE(par.failed) << par.error;
+      if (par.failed) continue;
+      EXPECT_EQ(par.checksum, expected);
+      if (!root()) continue;
+      EXPECT_EQ(par.mesh.node_count(), seq.mesh.node_count());
+      EXPECT_EQ(par.mesh.cohesive.count(), seq.mesh.cohesive.count());
+      const auto frame = cisamr::testing::cohesive_frame<3>(c.scene, pipeline::make_lattice<3>(c.scene, options));
+      EXPECT_TRUE(cisamr::testing::cohesive_mesh_is_right(par.mesh, frame));
+      const testing::RunOutcome3 one = testing::run_parallel3(SerialComm{}, c.scene, n, {}, options);
+      EXPECT_TRUE(par.mesh.coords == one.mesh.coords);
+      EXPECT_TRUE(par.mesh.node_phase == one.mesh.node_phase);
+      EXPECT_TRUE(par.mesh.cohesive.nodes == one.mesh.cohesive.nodes);
+      EXPECT_TRUE(par.mesh.cohesive.phase == one.mesh.cohesive.phase);
     }
   }
 }

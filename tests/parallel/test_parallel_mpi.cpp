@@ -12,6 +12,7 @@
 #include "parallel/session.hpp"
 #include "quality/quality.hpp"
 #include "scenes.hpp"
+#include "support/cohesive_compare.hpp"
 
 namespace cisamr::parallel {
 namespace {
@@ -76,6 +77,36 @@ TEST(MpiInvariance, PeriodicRandomScenes) {
     for (unsigned seed = 1; seed <= 2; ++seed) {
       SCOPED_TRACE("seed " + std::to_string(seed));
       expect_invariant(cisamr::testing::periodic_scene(seed), n, false);
+    }
+}
+
+// Cohesive cells (issue 13) under MPI: the sequential mesh's cells and copies, every
+// interface facet covered once in the gathered mesh (partition faces, periodic planes),
+// the copies' global ids those of one rank with the same partitions.
+TEST(MpiInvariance, CohesiveScenes) {
+  pipeline::Options options;
+  options.cohesive = true;
+  std::vector<geometry::SceneDesc> scenes = {testing::corner_scene(), testing::periodic_plane_scene()};
+  for (unsigned seed = 1; seed <= 2; ++seed) scenes.push_back(testing::random_scene(seed));
+  scenes.push_back(cisamr::testing::periodic_scene(1));
+  for (const geometry::SceneDesc& scene : scenes)
+    for (int n : partition_counts()) {
+      SCOPED_TRACE(scene.source + ", " + std::to_string(comm().size()) + " ranks, " + std::to_string(n) + " partitions");
+      const testing::RunOutcome seq = testing::run_sequential(scene, options);
+      const testing::RunOutcome par = testing::run_parallel(comm(), scene, n, GhostRule{}, options);
+      EXPECT_EQ(seq.failed, par.failed) << seq.error << " | " << par.error;
+      if (seq.failed || par.failed) continue;
+      EXPECT_EQ(par.checksum, seq.checksum);
+      if (!root()) continue;
+      EXPECT_EQ(par.mesh.node_count(), seq.mesh.node_count());
+      EXPECT_EQ(par.mesh.cohesive.count(), seq.mesh.cohesive.count());
+      const auto frame = cisamr::testing::cohesive_frame<2>(scene, pipeline::make_lattice<2>(scene, options));
+      const bool voids = std::ranges::any_of(scene.phases, [](const geometry::Phase& p) { return p.is_void; });
+      EXPECT_TRUE(cisamr::testing::cohesive_mesh_is_right(par.mesh, frame, voids));
+      const testing::RunOutcome one = testing::run_parallel(SerialComm{}, scene, n, GhostRule{}, options);
+      EXPECT_TRUE(par.mesh.coords == one.mesh.coords);
+      EXPECT_TRUE(par.mesh.node_phase == one.mesh.node_phase);
+      EXPECT_TRUE(par.mesh.cohesive.nodes == one.mesh.cohesive.nodes);
     }
 }
 
