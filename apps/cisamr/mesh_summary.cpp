@@ -17,6 +17,10 @@ void print_mesh_summary(std::FILE* out, const driver::MeshRun<Dim>& run, const d
                 run.total_seconds);
     if (run.distributed) std::fprintf(out, ", %d rank(s), %zu partitions", run.ranks, run.mesh.partitions.size());
     std::fprintf(out, "\n");
+    if (run.options.pipeline.cohesive)
+      std::fprintf(out, "%lld cohesive elements (%s) on the interfaces between phases, in %zu set(s)\n",
+                   static_cast<long long>(run.cohesive_elements), Dim == 2 ? "COH2D4" : "COH3D6",
+                   run.cohesive_sets.size());
     if constexpr (Dim == 2) {
       if (counters.collapsed > 0)
         std::fprintf(out, "%lld quads held a feature below the local resolution (a tangency, a thin gap or a wedge "

@@ -140,6 +140,28 @@ void take_figures(const Comm& comm, MeshRun<Dim>& run) {
     if (run.options.figures) run.phase_figures = phase_figures(comm, piece, run.mesh.phases);
   }
   if (run.options.figures) run.checksum = parallel::mesh_checksum(comm, piece);
+  if (run.options.pipeline.cohesive) {  // per phase pair (lower, upper), over every rank
+    const std::vector<geometry::Phase>& phases = run.mesh.phases;
+    const auto index = [&](std::int32_t id) {
+      return static_cast<std::size_t>(std::ranges::find_if(phases, [&](const geometry::Phase& p) { return p.id == id; }) -
+                                      phases.begin());
+    };
+    std::vector<std::int64_t> pairs(phases.size() * phases.size(), 0);
+    for (std::size_t c = 0; c < piece.cohesive.count(); ++c) {
+      const std::size_t p = index(piece.cohesive.phase[2 * c]), q = index(piece.cohesive.phase[2 * c + 1]);
+      if (p < phases.size() && q < phases.size()) ++pairs[p * phases.size() + q];
+    }
+    std::vector<typename MeshRun<Dim>::CohesiveSet> sets;
+    for (std::size_t i = 0; i < pairs.size(); ++i) {
+      const std::int64_t elements = comm.allreduce_sum(pairs[i]);
+      if (elements > 0)
+        sets.push_back({phases[i / phases.size()].id, phases[i % phases.size()].id, elements});
+    }
+    std::ranges::sort(sets, {}, [](const auto& s) { return std::pair(s.lower, s.upper); });
+    run.cohesive_sets = std::move(sets);
+    run.cohesive_elements = 0;
+    for (const auto& set : run.cohesive_sets) run.cohesive_elements += set.elements;
+  }
   if (run.any_periodic()) {  // every node on a max face is a slave (each eliminated once)
     std::int64_t slaves = 0;
     for (std::int64_t n = 0; n < run.mesh.piece.owned_nodes; ++n)

@@ -70,6 +70,14 @@ struct MeshRun {
   std::array<bool, Dim> periodic{};
   Vec<Dim> period{};
   std::int64_t periodic_slaves = 0;  // nodes on a periodic max face, over every rank
+  // --cohesive: the cohesive cells per phase pair (ascending), over every rank, and the
+  // node copies the split added (nodes less those of the mesh without cohesive cells).
+  struct CohesiveSet {
+    std::int32_t lower = 0, upper = 0;
+    std::int64_t elements = 0;
+  };
+  std::vector<CohesiveSet> cohesive_sets;
+  std::int64_t cohesive_elements = 0;
   bool any_periodic() const { return std::ranges::any_of(periodic, [](bool p) { return p; }); }
   double bound = 0;
   quality::AspectStats aspect;              // of the whole mesh

@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include "driver/driver.hpp"
+#include "io/mesh_io.hpp"
 
 namespace cisamr::driver {
 namespace {
@@ -113,6 +114,16 @@ std::string report(const MeshRun<Dim>& run, const std::string& scene_path, const
     for (const parallel::PhaseSpread& s : run.timings)
       if (s.name == "periodic") periodic["master_exchange_s"] = s.max;
     j["periodic"] = periodic;
+  }
+  if (run.options.pipeline.cohesive) {
+    // Zero-thickness cells on the interfaces: one set per phase pair, named as the .inp
+    // ELSET and the .msh physical group.
+    nlohmann::json sets = nlohmann::json::array();
+    for (const auto& set : run.cohesive_sets)
+      sets.push_back({{"name", io::cohesive_set_name(m.phases, set.lower, set.upper)},
+                      {"phases", {set.lower, set.upper}},
+                      {"elements", set.elements}});
+    j["cohesive"] = {{"elements", run.cohesive_elements}, {"sets", sets}, {"type", Dim == 2 ? "COH2D4" : "COH3D6"}};
   }
   j["checksum"] = hex(run.checksum);
   return j.dump(2) + "\n";

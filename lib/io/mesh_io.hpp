@@ -98,6 +98,10 @@ void write_vtu(const std::string& path, const mesh::SimplexMesh<Dim>& m,
 // MeshWriteOptions::any_periodic()).
 std::string pvtu_text(const std::vector<std::string>& pieces, bool periodic = false, bool cohesive = false);
 
+// The element set (.inp ELSET, .msh physical group) of the cohesive cells between phases
+// `lower` and `upper`: COH_<lower's name>_<upper's name> by Abaqus label rules.
+std::string cohesive_set_name(const std::vector<geometry::Phase>& phases, std::int32_t lower, std::int32_t upper);
+
 struct LoadedMesh {
   int dimension = 0;   // 2 or 3: which of mesh2 / mesh3 holds the mesh
   mesh::Mesh2 mesh2;

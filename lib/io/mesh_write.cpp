@@ -427,8 +427,7 @@ CohesiveGroups group_cohesive(const mesh::SimplexMesh<Dim>& m, const std::vector
     if (!groups.pairs.empty() && groups.pairs.back() == pair) continue;
     groups.pairs.push_back(pair);
     groups.begin.push_back(i);
-    std::string lower = phase_name(phases, pair.first), upper = phase_name(phases, pair.second);
-    groups.names.push_back(abaqus_label("COH_" + lower + "_" + upper));
+    groups.names.push_back(cohesive_set_name(phases, pair.first, pair.second));
   }
   groups.begin.push_back(count);
   return groups;
@@ -959,6 +958,10 @@ template void write_vtu<2>(const std::string&, const mesh::Mesh2&, const std::ve
                            const MeshWriteOptions&);
 template void write_vtu<3>(const std::string&, const mesh::Mesh3&, const std::vector<geometry::Phase>&,
                            const MeshWriteOptions&);
+
+std::string cohesive_set_name(const std::vector<geometry::Phase>& phases, std::int32_t lower, std::int32_t upper) {
+  return abaqus_label("COH_" + phase_name(phases, lower) + "_" + phase_name(phases, upper));
+}
 
 std::string pvtu_text(const std::vector<std::string>& pieces, bool periodic, bool cohesive) {
   // The arrays write_vtu_file declares (field data is read from the pieces).

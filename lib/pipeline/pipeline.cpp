@@ -156,8 +156,10 @@ namespace {
 template <int Dim>
 Result<Dim> with_cohesive(Result<Dim> result, const grid::Lattice<Dim>& lattice, const Options& options) {
   if (!options.cohesive) return result;
-  ScopedPhase timer(&result.times, "cohesive");
-  insert_cohesive_whole(result, lattice);
+  {
+    ScopedPhase timer(&result.times, "cohesive");  // ends before `result` is moved out
+    insert_cohesive_whole(result, lattice);
+  }
   return result;
 }
 

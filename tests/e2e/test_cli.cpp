@@ -282,6 +282,14 @@ TEST_F(Cli, CohesiveRefusalsAndOutput) {
     const auto one = report(""), three = report(" --partitions 3");
     EXPECT_EQ(one["checksum"], three["checksum"]);
     EXPECT_EQ(one["nodes"], three["nodes"]);
+    // The report's cohesive object: one set per phase pair, named as the files name them.
+    EXPECT_EQ(one["cohesive"], three["cohesive"]);
+    EXPECT_EQ(one["cohesive"]["type"], "COH2D4");
+    ASSERT_EQ(one["cohesive"]["sets"].size(), 1u);
+    EXPECT_EQ(one["cohesive"]["sets"][0]["name"], "COH_matrix_inclusion");  // the default phase names
+    EXPECT_EQ(one["cohesive"]["sets"][0]["phases"], nlohmann::json::array({1, 2}));
+    EXPECT_GT(one["cohesive"]["elements"].get<int>(), 20);
+    EXPECT_EQ(one["cohesive"]["elements"], one["cohesive"]["sets"][0]["elements"]);
   }
   const CommandResult ok = run("mesh " + scene.string() + " -o " + (dir / "c.vtu").string() + " --cohesive");
   EXPECT_EQ(ok.exit_code, 0) << ok.output;
