@@ -3,7 +3,7 @@
 # the parallel one give the same checksum (1 rank and 7 partitions, 2 ranks and 5), a
 # gathered .msh is byte-equal between 3 ranks and 1, and an STL file that one rank reads
 # (its share) or cannot open ends every rank with one message and exit status 2 within
-# seconds, leaving no output.
+# seconds, leaving no output. The same with --cohesive (a gathered .inp).
 # usage: cli_test3.sh CISAMR MPIEXEC SHAPES_DIR
 set -u
 cisamr=$1 mpiexec=$2 shapes=$3
@@ -50,6 +50,26 @@ run_mpi 3 "$cisamr" mesh "$dir/scene.json" -o "$dir/three.msh" --extra-levels 1 
   fail "3 ranks, --gather"
 "$cisamr" mesh "$dir/scene.json" -o "$dir/single.msh" --extra-levels 1 --partitions 8 -q || fail "1 rank, 8 partitions"
 cmp -s "$dir/three.msh" "$dir/single.msh" || fail "gathered .msh differs between 3 ranks and 1 rank"
+
+# --cohesive (issue 13): the same checksum (bulk and cohesive cells) sequentially, on 1 rank
+# with 7 partitions and on 2 ranks with 5; a gathered .inp byte-equal between 3 ranks and 1.
+"$cisamr" mesh "$dir/scene.json" -o "$dir/cseq.inp" --extra-levels 1 --cohesive --report "$dir/cseq.json" -q ||
+  fail "sequential --cohesive"
+cref=$(checksum "$dir/cseq.json")
+[ "$cref" != "$ref" ] || fail "--cohesive: the checksum does not count the cohesive cells"
+grep -q '"COH_matrix_particle"' "$dir/cseq.json" || fail "--cohesive: no set in the report"
+"$cisamr" mesh "$dir/scene.json" -o "$dir/cone.vtu" --extra-levels 1 --cohesive --partitions 7 --report "$dir/cone.json" -q ||
+  fail "--cohesive, 1 rank, 7 partitions"
+[ "$(checksum "$dir/cone.json")" = "$cref" ] || fail "--cohesive, 1 rank, 7 partitions: checksum differs"
+run_mpi 2 "$cisamr" mesh "$dir/scene.json" -o "$dir/ctwo.pvtu" --extra-levels 1 --cohesive --partitions 5 --report "$dir/ctwo.json" -q ||
+  fail "--cohesive, 2 ranks"
+[ "$(checksum "$dir/ctwo.json")" = "$cref" ] || fail "--cohesive, 2 ranks, 5 partitions: checksum differs"
+"$cisamr" certify "$dir/ctwo.pvtu" -q > /dev/null || fail "--cohesive, 2 ranks: the pieces do not certify"
+run_mpi 3 "$cisamr" mesh "$dir/scene.json" -o "$dir/cthree.inp" --extra-levels 1 --cohesive --partitions 8 --gather -q ||
+  fail "--cohesive, 3 ranks, --gather"
+"$cisamr" mesh "$dir/scene.json" -o "$dir/csingle.inp" --extra-levels 1 --cohesive --partitions 8 -q ||
+  fail "--cohesive, 1 rank, 8 partitions"
+cmp -s "$dir/cthree.inp" "$dir/csingle.inp" || fail "--cohesive: gathered .inp differs between 3 ranks and 1 rank"
 
 # A malformed STL file: read by one rank only (the third file, rank 2 of 3).
 printf 'solid broken\n facet normal 0 0 1\n  outer loop\n   vertex 0 0\n' > "$dir/bad.stl"
