@@ -121,7 +121,7 @@ inline geometry::SceneDesc periodic_plane_scene() {
     s.inclusions.push_back(std::move(inc));
   };
   add(Polygon{{{0, 3}, {3.5, 3}, {3.5, 7}, {0, 7}}}, 2);
-  add(Polygon{{{0, 0}, {2, 0}, {2, 1}, {0, 1}}}, 3);
+  add(Polygon{{{0, 0}, {2, 0}, {2, 3}, {0, 3}}}, 3);  // meets box 2 along y = 3: triple points
   add(Circle{{9.3, 11.6}, 1.7}, 3);
   return s;
 }

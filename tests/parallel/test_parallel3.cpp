@@ -163,6 +163,8 @@ TEST_P(Invariance3, CohesiveScenes) {
     for (GlobalId g : par.distributed.piece.mesh.node_global_id) seen[static_cast<std::size_t>(g)]++;
     for (char s : seen) EXPECT_EQ(s, 1);
     cells += static_cast<std::int64_t>(par.mesh.cohesive.count());
+    // Tangent spheres of phases 2 and 3 in the matrix: triple lines, each node in 3 copies.
+    if (c.name == "contact") EXPECT_GT(cisamr::testing::multi_phase_points(par.mesh), 0);
   }
   EXPECT_GT(cells, 10000);
 }

@@ -70,6 +70,16 @@ std::int64_t cohesive_cells_on_periodic_planes(const mesh::SimplexMesh<Dim>& m,
   return count;
 }
 
+// Positions where three or more phases' copies meet (triple points in 2D, points of
+// triple lines in 3D): what the tests need to have seen.
+template <int Dim>
+std::int64_t multi_phase_points(const mesh::SimplexMesh<Dim>& m) {
+  const quality::WeldedMesh<Dim> welded = quality::weld_view(m);
+  std::vector<int> copies(welded.mesh.node_count(), 0);
+  for (LocalId w : welded.class_of) ++copies[static_cast<std::size_t>(w)];
+  return std::ranges::count_if(copies, [](int n) { return n >= 3; });
+}
+
 // What `cisamr mesh --cohesive` does to a sequential result (pipeline::insert_cohesive_whole),
 // periodic planes included, checked as above, and the bulk unchanged (the welded split
 // mesh has the original's cells corner by corner). Adds the cells made to `cells` and
