@@ -13,6 +13,7 @@
 #include "commands.hpp"
 #include "core/error.hpp"
 #include "core/timer.hpp"
+#include "geometry/periodic.hpp"
 #include "geometry/scene.hpp"
 #include "io/mesh_io.hpp"
 #include "io/scene_io.hpp"
@@ -92,13 +93,42 @@ std::string match_scene_phases(const CertifyArgs& args, io::LoadedMesh& loaded, 
   return note;
 }
 
+// The frame in which facets on the periodic planes are checked too: a periodic scene's faces
+// where the mesher puts them, min and min + N·h (as certify's check_periodic takes them);
+// without a scene, the axes the file's constraints tie and the mesh's bounding box (whose
+// max faces are those same exact coordinates: every face of a whole mesh holds nodes).
+template <int Dim>
+std::optional<quality::CohesivePeriodicity<Dim>> periodic_frame(const io::LoadedMesh& loaded,
+                                                                const mesh::SimplexMesh<Dim>& mesh,
+                                                                const geometry::SceneDesc* scene) {
+  std::optional<quality::CohesivePeriodicity<Dim>> frame;
+  if (scene && scene->any_periodic()) {
+    frame.emplace();
+    const Vec3 period = geometry::periods(*scene);
+    for (int d = 0; d < Dim; ++d) {
+      const bool axis = scene->periodic[static_cast<std::size_t>(d)];
+      frame->axes[static_cast<std::size_t>(d)] = axis;
+      frame->faces.min[d] = scene->domain_min[d];
+      frame->faces.max[d] = axis ? scene->domain_min[d] + period[d] : scene->domain_max[d];
+    }
+  } else if (!scene && loaded.any_periodic()) {
+    frame.emplace();
+    frame->faces = quality::bounding_box<Dim>(mesh);
+    for (int d = 0; d < Dim; ++d) frame->axes[static_cast<std::size_t>(d)] = loaded.periodic_axes[static_cast<std::size_t>(d)];
+  }
+  return frame;
+}
+
 // The cohesive cells' checks, with the phase ids the file gives them (the bottom is on the
-// lower id of the file's numbering, so these run before any relabelling to the scene's).
+// lower id of the file's numbering, so these run before any relabelling to the scene's),
+// across the periodic planes of a periodic mesh.
 template <int Dim>
 std::optional<quality::CohesiveSection> certify_cohesive_cells(const io::LoadedMesh& loaded,
                                                                const mesh::SimplexMesh<Dim>& mesh,
+                                                               const geometry::SceneDesc* scene,
                                                                const GlobalFlags& flags, PhaseTimes& times) {
   if (mesh.cohesive.count() == 0) return std::nullopt;
+  const std::optional<quality::CohesivePeriodicity<Dim>> periodic = periodic_frame<Dim>(loaded, mesh, scene);
   progress(flags, "checking the cohesive cells");
   ScopedPhase timer(&times, "cohesive");
   std::optional<quality::CohesiveSetsInFile> sets;
@@ -107,7 +137,7 @@ std::optional<quality::CohesiveSection> certify_cohesive_cells(const io::LoadedM
     for (const io::LoadedMesh::CohesiveSet& set : loaded.cohesive_sets) sets->sets.push_back({set.name, set.named_pairs});
     sets->set_of_cell = loaded.cohesive_set_of_cell;
   }
-  return quality::certify_cohesive<Dim>(mesh, sets ? &*sets : nullptr);
+  return quality::certify_cohesive<Dim>(mesh, sets ? &*sets : nullptr, periodic ? &*periodic : nullptr);
 }
 
 quality::Certificate certify_loaded(const CertifyArgs& args, io::LoadedMesh& loaded,
@@ -129,12 +159,12 @@ quality::Certificate certify_loaded(const CertifyArgs& args, io::LoadedMesh& loa
   } else if (!args.phase_map.empty()) {
     throw InputError("--phase-map", "", "needs --scene (the phases are mapped to the scene's)");
   }
+  const geometry::SceneDesc* scene_or_none = scene ? &*scene : nullptr;
   const std::optional<quality::CohesiveSection> cohesive =
-      loaded.dimension == 2 ? certify_cohesive_cells<2>(loaded, loaded.mesh2, flags, times)
-                            : certify_cohesive_cells<3>(loaded, loaded.mesh3, flags, times);
+      loaded.dimension == 2 ? certify_cohesive_cells<2>(loaded, loaded.mesh2, scene_or_none, flags, times)
+                            : certify_cohesive_cells<3>(loaded, loaded.mesh3, scene_or_none, flags, times);
   std::string match_note;
   if (scene) match_note = match_scene_phases(args, loaded, *scene);
-  const geometry::SceneDesc* scene_or_none = scene ? &*scene : nullptr;
   quality::Certificate c = loaded.dimension == 2 ? certify_mesh<2>(loaded.mesh2, scene_or_none, options, flags, times)
                                                  : certify_mesh<3>(loaded.mesh3, scene_or_none, options, flags, times);
   if (!match_note.empty()) c.notes.push_back(match_note);

@@ -121,9 +121,15 @@ struct LoadedMesh {
   std::vector<PeriodicLink> periodic_links;
   // .vtu / .pvtu: the point data periodic_master (per node, the full master's global id or -1).
   std::vector<GlobalId> periodic_master;
+  // The axes along which the file's periodic constraints tie nodes: the translations of the
+  // .msh $Periodic links, the axes along which a .vtu node and its periodic_master differ,
+  // the REF_X, REF_Y, REF_Z node sets of our .inp. All false for a file without them.
+  std::array<bool, 3> periodic_axes{};
+  bool any_periodic() const { return periodic_axes[0] || periodic_axes[1] || periodic_axes[2]; }
   // Cohesive cells (docs/cohesive-design.md §6.1) are in mesh2/mesh3.cohesive, in the internal
   // node order, with the phases the file claims for them (0 where it says nothing), and
-  // node_phase as the file gives it (.vtu) or else each node's first bulk cell's phase.
+  // node_phase as the file gives it (.vtu) or else each node's first bulk cell's phase (for
+  // a node of no bulk cell, the phase its first cohesive cell claims for that side).
   // Their element sets as the file names them (.msh physical groups COH_*, .inp ELSETs of
   // COH2D4/COH3D6 blocks and *ELSETs named COH_*); a .vtu names none.
   struct CohesiveSet {

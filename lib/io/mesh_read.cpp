@@ -3,6 +3,7 @@
 #include <cctype>
 #include <filesystem>
 #include <limits>
+#include <unordered_map>
 
 #include "core/error.hpp"
 #include "io/mesh_io.hpp"
@@ -34,14 +35,44 @@ void fill_mesh(RawMesh& raw, mesh::SimplexMesh<Dim>& m) {
   m.cohesive.partition = std::move(raw.cohesive_partition);
   if (m.cohesive.partition.empty()) m.cohesive.partition.assign(cohesive, 0);
   m.node_phase = std::move(raw.node_phase);
-  if (m.node_phase.empty()) {  // not in the file: each node's first bulk cell's phase
+  if (m.node_phase.empty()) {
+    // Not in the file: each node's first bulk cell's phase, or for a copy of no bulk cell (a
+    // periodic master only the join made) the side its first cohesive cell puts it on.
     m.node_phase.assign(nodes, 0);
     std::vector<bool> seen(nodes, false);
     for (std::size_t i = 0; i < m.cell_nodes.size(); ++i) {
       const auto n = static_cast<std::size_t>(m.cell_nodes[i]);
       if (!seen[n]) seen[n] = true, m.node_phase[n] = m.cell_phase[i / (Dim + 1)];
     }
+    for (std::size_t i = 0; i < m.cohesive.nodes.size(); ++i) {
+      const auto n = static_cast<std::size_t>(m.cohesive.nodes[i]);
+      const std::size_t cell = i / (2 * Dim), side = (i % (2 * Dim)) / Dim;  // 0: bottom, 1: top
+      if (!seen[n]) seen[n] = true, m.node_phase[n] = m.cohesive.phase[2 * cell + side];
+    }
   }
+}
+
+// The axes the file's periodic constraints tie: the translation of each $Periodic link
+// (row a, column 4 of its affine map), and the axes along which a node and its
+// periodic_master (a global id) differ.
+std::array<bool, 3> constrained_axes(const RawMesh& raw) {
+  std::array<bool, 3> axes = raw.periodic_axes;
+  for (const LoadedMesh::PeriodicLink& link : raw.periodic_links)
+    if (link.affine.size() == 16)
+      for (int a = 0; a < 3; ++a) axes[static_cast<std::size_t>(a)] = axes[static_cast<std::size_t>(a)] || link.affine[4 * a + 3] != 0;
+  if (std::none_of(raw.periodic_master.begin(), raw.periodic_master.end(), [](GlobalId g) { return g >= 0; })) return axes;
+  std::unordered_map<GlobalId, std::size_t> node_of;
+  const std::size_t nodes = raw.coords.size() / 3;
+  for (std::size_t n = 0; n < nodes; ++n) node_of.emplace(raw.node_global_id.empty() ? GlobalId(n) : raw.node_global_id[n], n);
+  for (std::size_t n = 0; n < nodes; ++n) {
+    if (raw.periodic_master[n] < 0) continue;
+    const auto master = node_of.find(raw.periodic_master[n]);
+    if (master == node_of.end()) continue;  // a master in no piece read: nothing to compare
+    for (int a = 0; a < 3; ++a)
+      axes[static_cast<std::size_t>(a)] =
+          axes[static_cast<std::size_t>(a)] || raw.coords[3 * n + a] != raw.coords[3 * master->second + a];
+  }
+  return axes;
 }
 
 // The cohesive cells' checks: their kind matches the bulk cells', node indices in range,
@@ -122,6 +153,7 @@ LoadedMesh finish(RawMesh raw, const std::string& path) {
   if (!raw.periodic_master.empty() && raw.periodic_master.size() != nodes)
     throw InputError(path, "periodic_master", "has " + std::to_string(raw.periodic_master.size()) + " values for " +
                                                   std::to_string(nodes) + " points");
+  result.periodic_axes = constrained_axes(raw);
   result.periodic_links = std::move(raw.periodic_links);
   result.periodic_master = std::move(raw.periodic_master);
   if (!raw.cohesive_nodes.empty()) {

@@ -103,8 +103,9 @@ void resolve_cohesive_sets(RawMesh& raw, TaggedCells& cells, const ElementSets& 
 // "** cisamr phase ID NAME" comment gives one. *NSET, *SURFACE, materials, steps etc. are
 // ignored; *INCLUDE is refused (the included file would hold part of the mesh). The nodes
 // our writer lists in a "** cisamr periodic reference nodes ID..." comment (REF_X ... of a
-// periodic mesh, in no element) are dropped; *EQUATION constraints are ignored. COH2D4 and
-// COH3D6 elements are the cohesive cells (resolve_cohesive_sets).
+// periodic mesh, in no element) are dropped, and their sets REF_X, REF_Y, REF_Z give the
+// periodic axes; *EQUATION constraints are ignored. COH2D4 and COH3D6 elements are the
+// cohesive cells (resolve_cohesive_sets).
 LoadedMesh read_inp(const std::string& path) {
   const MappedFile file(path);
   const std::string_view text = file.view();
@@ -232,6 +233,11 @@ LoadedMesh read_inp(const std::string& path) {
         }
         announced.reset();
         announced_cohesive.reset();
+      } else if (keyword == "NSET" && !reference_nodes.empty()) {
+        // Our periodic meshes' REF_X, REF_Y, REF_Z: the periodic axes.
+        const std::string nset = upper(params["NSET"]);
+        for (int a = 0; a < 3; ++a)
+          if (nset == std::string("REF_") + "XYZ"[a]) raw.periodic_axes[static_cast<std::size_t>(a)] = true;
       } else if (keyword == "ELSET") {
         const std::string elset = params["ELSET"];
         if (elset.empty()) fail("*ELSET without ELSET=");

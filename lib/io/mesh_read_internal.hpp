@@ -99,6 +99,7 @@ struct RawMesh {
   std::vector<LoadedMesh::CohesiveSet> cohesive_sets;
   std::vector<std::int32_t> cohesive_set_of_cell;  // empty = the format names no sets
   std::vector<std::int32_t> node_phase;          // .vtu point data; empty = absent
+  std::array<bool, 3> periodic_axes{};           // .inp: its REF_X, REF_Y, REF_Z sets
 };
 
 // Which format's cohesive node order a file uses (mesh::CohesiveOrder).
@@ -118,32 +119,19 @@ void cohesive_to_internal(int corners, CohesiveFileOrder format, const T* file, 
   else apply(format == CohesiveFileOrder::vtk ? O3::vtk : format == CohesiveFileOrder::gmsh ? O3::gmsh : O3::abaqus);
 }
 
-// The name the writers give a phase pair's cohesive set, compared without case: the label
-// of "COH_" + A + "_" + B (letters, digits, '_' and '-' kept, anything else '_', at most 80
-// characters; mesh_write.cpp's abaqus_label, which starts with a letter here).
-inline std::string cohesive_set_label(std::string_view lower_name, std::string_view upper_name) {
-  std::string label = "COH_";
-  label.append(lower_name);
-  label += '_';
-  label.append(upper_name);
-  for (char& c : label) {
-    const bool kept = (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_' || c == '-';
-    c = kept ? static_cast<char>(std::toupper(static_cast<unsigned char>(c))) : '_';
-  }
-  return label.substr(0, 80);
-}
-
 // The phase pairs (p < q) a cohesive set's name denotes among `phases` (id → name, "phase<id>"
-// for a phase the file does not name): COH_<A>_<B> with the names' labels, or COH_<p>_<q>
-// with the ids. Every fitting pair, ascending.
+// for a phase the file does not name), case ignored: the writers' name for the pair
+// (cohesive_set_name: COH_<A>_<B>), or COH_<p>_<q> with the ids. Every fitting pair, ascending.
 inline std::vector<std::array<std::int32_t, 2>> cohesive_pairs_named(std::string_view set_name,
                                                                     const std::map<int, std::string>& phases) {
+  std::vector<geometry::Phase> named;
+  for (const auto& [id, name] : phases) named.push_back({id, name, false});
   std::vector<std::array<std::int32_t, 2>> pairs;
   const std::string wanted = upper(set_name);
   for (auto p = phases.begin(); p != phases.end(); ++p)
     for (auto q = std::next(p); q != phases.end(); ++q)
-      if (cohesive_set_label(p->second, q->second) == wanted ||
-          cohesive_set_label(std::to_string(p->first), std::to_string(q->first)) == wanted)
+      if (upper(cohesive_set_name(named, p->first, q->first)) == wanted ||
+          "COH_" + std::to_string(p->first) + "_" + std::to_string(q->first) == wanted)
         pairs.push_back({p->first, q->first});
   return pairs;
 }

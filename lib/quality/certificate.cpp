@@ -230,9 +230,10 @@ bool CohesiveSection::ok() const {
 }
 
 template <int Dim>
-CohesiveSection certify_cohesive(const mesh::SimplexMesh<Dim>& m, const CohesiveSetsInFile* sets) {
+CohesiveSection certify_cohesive(const mesh::SimplexMesh<Dim>& m, const CohesiveSetsInFile* sets,
+                                 const CohesivePeriodicity<Dim>* periodic) {
   constexpr std::size_t kExamplesPerKind = 3, kExamplesTotal = 24;
-  const CohesiveReport<Dim> r = check_cohesive<Dim>(m);
+  const CohesiveReport<Dim> r = check_cohesive<Dim>(m, periodic);
   CohesiveSection s;
   s.cells = r.cohesive_cells;
   s.interface_facets = r.interface_facets;
@@ -311,8 +312,10 @@ CohesiveSection certify_cohesive(const mesh::SimplexMesh<Dim>& m, const Cohesive
   return s;
 }
 
-template CohesiveSection certify_cohesive<2>(const mesh::SimplexMesh<2>&, const CohesiveSetsInFile*);
-template CohesiveSection certify_cohesive<3>(const mesh::SimplexMesh<3>&, const CohesiveSetsInFile*);
+template CohesiveSection certify_cohesive<2>(const mesh::SimplexMesh<2>&, const CohesiveSetsInFile*,
+                                             const CohesivePeriodicity<2>*);
+template CohesiveSection certify_cohesive<3>(const mesh::SimplexMesh<3>&, const CohesiveSetsInFile*,
+                                             const CohesivePeriodicity<3>*);
 
 // ---------------------------------------------------------------------------------------
 

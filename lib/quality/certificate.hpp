@@ -72,10 +72,11 @@ struct CohesiveSection {
   bool ok() const;
 };
 
-// Checks the cohesive cells of `m` (check_cohesive, with the file's phase ids) and, given
-// the file's sets, the set rules.
+// Checks the cohesive cells of `m` (check_cohesive, with the file's phase ids; across the
+// periodic planes of `periodic` when given) and, given the file's sets, the set rules.
 template <int Dim>
-CohesiveSection certify_cohesive(const mesh::SimplexMesh<Dim>& m, const CohesiveSetsInFile* sets);
+CohesiveSection certify_cohesive(const mesh::SimplexMesh<Dim>& m, const CohesiveSetsInFile* sets,
+                                 const CohesivePeriodicity<Dim>* periodic = nullptr);
 
 struct Certificate {
   std::string mesh_source;   // file names for the report ("" if none)

@@ -1,7 +1,8 @@
 #!/bin/bash
 # certify reads cohesive meshes back and checks them (issue #13, docs/cohesive-design.md
 # §6): the .vtu, .msh and .inp that `cisamr mesh --cohesive` writes for a 2D and a 3D
-# example pass, with a cohesive report in the summary and the JSON; each format edited to
+# example and for a periodic square with cells on a periodic plane pass, with a cohesive
+# report in the summary and the JSON; each format edited to
 # drop a cohesive cell, to move a top node off its bottom, or to swap a cell's bottom and
 # top fails with exit 3 and the matching count. `--explode F` writes a .vtu whose regions
 # are moved apart (every cohesive cell open, each region shifted as one piece) and is
@@ -88,14 +89,27 @@ json_count() { /usr/bin/python3 -c 'import json, sys; print(json.load(open(sys.a
 have_meshio=1
 /usr/bin/python3 -c 'import meshio' 2>/dev/null || have_meshio=0
 
-for scene in composite spheres3d; do
+# A periodic square whose box inclusion lies on the x planes: cohesive cells on a periodic
+# plane, checked in the frame the file's constraints give (certify without --scene).
+cat > "$dir/plane.json" <<'EOF'
+{"format": "cisamr-scene/1", "dimension": 2, "domain": {"min": [0, 0], "max": [8, 8], "periodic": true},
+ "mesh": {"h": 1.0}, "phases": [{"id": 1, "name": "matrix"}, {"id": 2, "name": "box"}],
+ "inclusions": [{"shape": "polygon", "vertices": [[0, 2], [3, 2], [3, 5], [0, 5]], "closed": true, "phase": 2}]}
+EOF
+
+for scene in composite spheres3d plane; do
+  scene_file="$source_dir/data/examples/$scene.json"
+  [ "$scene" = plane ] && scene_file="$dir/plane.json"
   for ext in vtu msh inp; do
     mesh="$dir/$scene.$ext"
-    "$cisamr" mesh "$source_dir/data/examples/$scene.json" -o "$mesh" --cohesive -q || fail "mesh $scene.$ext"
+    "$cisamr" mesh "$scene_file" -o "$mesh" --cohesive -q || fail "mesh $scene.$ext"
+    if [ "$scene" = plane ]; then
+      "$cisamr" certify "$mesh" --scene "$scene_file" -q || fail "certify $scene.$ext against its scene"
+    fi
     "$cisamr" certify "$mesh" --json "$dir/c.json" > "$dir/summary.txt"
     rc=$?
     [ $rc -eq 0 ] || fail "certify $scene.$ext: exit $rc: $(cat "$dir/summary.txt")"
-    grep -Eq '^cohesive: [1-9][0-9]* elements in [0-9]+ (sets|phase pairs); every interface facet covered once$' "$dir/summary.txt" ||
+    grep -Eq '^cohesive: [1-9][0-9]* elements in [0-9]+ (sets?|phase pairs?); every interface facet covered once$' "$dir/summary.txt" ||
       fail "$scene.$ext: no cohesive line in the summary: $(cat "$dir/summary.txt")"
     [ "$(json_count "$dir/c.json" ok)" = True ] || fail "$scene.$ext: the JSON's cohesive object is not ok"
     [ "$(json_count "$dir/c.json" elements)" = "$(json_count "$dir/c.json" interface_facets)" ] ||
@@ -117,14 +131,15 @@ for scene in composite spheres3d; do
     done
   done
   echo "$scene: .vtu, .msh and .inp certified; every edited copy fails"
+  [ "$scene" = plane ] && continue
 
   # --explode: every cohesive cell opens (no top on its bottom), and each bulk region moves
   # as one piece, regions by different amounts.
   exploded="$dir/${scene}_exploded.vtu"
   "$cisamr" mesh "$source_dir/data/examples/$scene.json" -o "$exploded" --cohesive --explode 1.5 -q || fail "mesh --explode $scene"
-  "$cisamr" certify "$exploded" --json "$dir/e.json" -q
+  "$cisamr" certify "$exploded" --json "$dir/e_$scene.json" -q
   [ $? -eq 3 ] || fail "$scene: an exploded mesh must fail certify"
-  [ "$(json_count "$dir/e.json" not_coincident)" = "$(json_count "$dir/e.json" elements)" ] ||
+  [ "$(json_count "$dir/e_$scene.json" not_coincident)" = "$(json_count "$dir/e_$scene.json" elements)" ] ||
     fail "$scene: not every cohesive cell of the exploded mesh is open"
   if [ $have_meshio -eq 1 ]; then
     /usr/bin/python3 - "$dir/$scene.vtu" "$exploded" <<'EOF' || fail "$scene: the exploded regions did not move as pieces"
@@ -170,7 +185,7 @@ if [ -n "$mpiexec" ]; then
   timeout 120 "$mpiexec" -n 2 --oversubscribe --allow-run-as-root "$cisamr" mesh "$scene" -o "$dir/g.vtu" --gather \
     --cohesive --explode 1.5 -q || fail "mpiexec: mesh --gather --explode"
   "$cisamr" certify "$dir/g.vtu" --json "$dir/g.json" -q
-  [ "$(json_count "$dir/g.json" not_coincident)" = "$(json_count "$dir/e.json" elements)" ] ||
+  [ "$(json_count "$dir/g.json" not_coincident)" = "$(json_count "$dir/e_spheres3d.json" elements)" ] ||
     fail "the gathered exploded mesh differs from the sequential one in its open cohesive cells"
   echo "mpiexec: the .pvtu of 2 ranks certified; --gather --explode opens every cohesive cell"
 fi

@@ -260,6 +260,35 @@ TEST(CohesiveIo, InpPhasesComeFromTheCommentOrElseTheSetName) {
   EXPECT_TRUE(several.cohesive_sets[1].named_pairs.empty());
 }
 
+// What certify's periodic frame needs without a scene: the axes the file's constraints
+// tie, from each format's own constraints.
+TEST(CohesiveIo, PeriodicAxesComeFromTheFilesConstraints) {
+  TempDir dir;
+  const mesh::Mesh2 m = cohesive_mesh2();  // a square grid: every face node has its translate
+  for (const std::array<bool, 3>& axes : {std::array<bool, 3>{true, true, false}, std::array<bool, 3>{false, true, false},
+                                          std::array<bool, 3>{false, false, false}})
+    for (const char* name : {"p.vtu", "p.msh", "p.inp"}) {
+      MeshWriteOptions options;
+      options.periodic = axes;
+      write_mesh(dir.file(name), m, kPhases, options);
+      const LoadedMesh l = read_mesh(dir.file(name));
+      EXPECT_EQ(l.periodic_axes, axes) << name;
+      EXPECT_EQ(l.any_periodic(), axes[0] || axes[1]) << name;
+      EXPECT_EQ(l.mesh2.cohesive.count(), m.cohesive.count()) << name;
+    }
+}
+
+// A copy in no bulk cell (a periodic master only the join made) takes its phase from the
+// side of the cohesive cell it is on, where the file has no node_phase.
+TEST(CohesiveIo, NodePhaseOfACopyInNoBulkCellComesFromItsCohesiveCell) {
+  TempDir dir;
+  const LoadedMesh l = read_mesh(dir.write(
+      "o.inp", "*NODE\n1, 0, 0\n2, 1, 0\n3, 0, 1\n4, 0, 0\n5, 0, 1\n*ELEMENT, TYPE=CPS3, ELSET=A\n1, 1, 2, 3\n"
+               "** cisamr cohesive 1 4 COH_A_B\n*ELEMENT, TYPE=COH2D4, ELSET=COH_A_B\n2, 3, 1, 4, 5\n"));
+  EXPECT_EQ(l.mesh2.cohesive.phase, (std::vector<std::int32_t>{1, 4}));
+  EXPECT_EQ(l.mesh2.node_phase, (std::vector<std::int32_t>{1, 1, 1, 4, 4}));
+}
+
 void expect_read_error(const std::string& path, const std::string& problem) {
   try {
     read_mesh(path);
