@@ -5,7 +5,6 @@
 #include <memory>
 #include <optional>
 #include <string>
-#include <utility>
 #include <variant>
 
 #include <unistd.h>
@@ -15,11 +14,7 @@
 #include "progress_line.hpp"
 #include "driver/driver.hpp"
 #include "io/atomic_file.hpp"
-#include "io/mesh_svg.hpp"
-#include "mesh/explode.hpp"
 #include "parallel/collective.hpp"
-#include "parallel/merge.hpp"
-#include "parallel/output.hpp"
 #include "parallel/session.hpp"
 
 namespace cisamr::app {
@@ -48,38 +43,6 @@ void check_explode(const MeshArgs& args, const driver::Output& output) {
     throw InputError("--explode", "", "writes one .vtu file: give -o NAME.vtu (with --gather in a parallel run)");
 }
 
-// The mesh written as driver::write_outputs writes it, but with each region moved by
-// mesh::exploded_coords (on the whole mesh: gathered on rank 0 in a parallel run) and no
-// periodic constraints (an exploded mesh has none). The picture, the report and the summary
-// describe the mesh as meshed.
-template <int Dim>
-void write_exploded(const Comm& comm, driver::MeshRun<Dim>& run, const driver::Output& output,
-                    const std::string& svg, double factor) {
-  ScopedPhase timer(&run.mesh.times, "write");
-  mesh::SimplexMesh<Dim> gathered;
-  if (comm.size() > 1) gathered = parallel::gather_mesh<Dim>(comm, run.mesh.piece);
-  mesh::SimplexMesh<Dim>& whole = comm.size() > 1 ? gathered : run.mesh.piece.mesh;
-  std::vector<double> meshed_coords;
-  if (comm.rank() == 0) meshed_coords = std::exchange(whole.coords, mesh::exploded_coords<Dim>(whole, factor));
-  io::MeshWriteOptions options;
-  options.format = output.format;
-  options.face_box = Box3{};
-  for (int d = 0; d < Dim; ++d) options.face_box->min[d] = run.face_box.min[d], options.face_box->max[d] = run.face_box.max[d];
-  parallel::write_gathered<Dim>(comm, output.path, whole, run.mesh.phases, options);
-  if (comm.rank() == 0) whole.coords = std::move(meshed_coords);
-  if (svg.empty()) return;
-  parallel::run_collectively(comm, [&] {
-    if (comm.rank() != 0) return;
-    geometry::SceneDesc header;  // what the picture needs: phases and domain
-    header.phases = run.mesh.phases;
-    for (int d = 0; d < Dim; ++d) header.domain_min[d] = run.mesh.domain.min[d], header.domain_max[d] = run.mesh.domain.max[d];
-    if constexpr (Dim == 2)
-      io::write_mesh_svg(svg, whole, header);
-    else
-      io::write_mesh_svg(svg, whole, header, run.options.svg_slice);
-  });
-}
-
 void run_mesh(MeshArgs& args, const GlobalFlags& flags, int& exit_code) {
   const Comm& comm = parallel::world();
   driver::Options& options = args.options;
@@ -100,7 +63,7 @@ void run_mesh(MeshArgs& args, const GlobalFlags& flags, int& exit_code) {
   }
   options.progress = ranks.get();
   // Fail on a bad output name before any work.
-  const driver::Output output =
+  driver::Output output =
       driver::plan_output(comm, args.output, args.gather, driver::is_distributed(comm, options), args.format,
                           args.plane == "strain" ? io::PlaneKind::strain : io::PlaneKind::stress);
   if (options.pipeline.cohesive)
@@ -109,14 +72,12 @@ void run_mesh(MeshArgs& args, const GlobalFlags& flags, int& exit_code) {
         throw InputError(output.path, "", "--cohesive: Medit .mesh cannot hold cohesive elements; write .vtu, .msh or .inp");
     });
   parallel::run_collectively(comm, [&] { check_explode(args, output); });
+  output.explode = args.explode.value_or(0);
   auto meshed = driver::mesh_scene(comm, args.scene, options);
   std::visit(
       [&](auto& run) {
         io::OutputSet outputs;  // the mesh, its pieces, the picture and the report, or none of them
-        if (args.explode)
-          write_exploded(comm, run, output, args.svg, *args.explode);
-        else
-          driver::write_outputs(comm, run, output, args.svg);
+        driver::write_outputs(comm, run, output, args.svg);
         driver::finish(comm, run);
         if (!args.report.empty())
           parallel::run_collectively(comm, [&] {

@@ -16,6 +16,7 @@
 #include "io/mesh_svg.hpp"
 #include "io/scene_io.hpp"
 #include "mesh/metrics.hpp"
+#include "mesh/explode.hpp"
 #include "mesh/periodic_links.hpp"
 #include "parallel/checksum.hpp"
 #include "parallel/collective.hpp"
@@ -269,7 +270,7 @@ void write_outputs(const Comm& comm, MeshRun<Dim>& run, const Output& output, co
   // On one rank the piece is the whole mesh (nodes in global-id order).
   mesh::SimplexMesh<Dim> gathered_copy;
   if ((!output.pieces || picture) && comm.size() > 1) gathered_copy = parallel::gather_mesh<Dim>(comm, piece);
-  const mesh::SimplexMesh<Dim>& gathered = comm.size() > 1 ? gathered_copy : piece.mesh;
+  mesh::SimplexMesh<Dim>& gathered = comm.size() > 1 ? gathered_copy : run.mesh.piece.mesh;
   io::MeshWriteOptions options;
   options.format = output.format;
   options.plane = output.plane;
@@ -285,10 +286,16 @@ void write_outputs(const Comm& comm, MeshRun<Dim>& run, const Output& output, co
     options.periodic_master =
         parallel::periodic_masters<Dim>(comm, piece.mesh, run.face_box, run.periodic, options.periodic_voids);
   }
+  std::vector<double> meshed_coords;  // --explode: the regions moved apart, in the file only
+  if (output.explode > 1 && !output.pieces) {
+    options.periodic = {};
+    if (comm.rank() == 0) meshed_coords = std::exchange(gathered.coords, mesh::exploded_coords<Dim>(gathered, output.explode));
+  }
   if (output.pieces)
     parallel::write_pvtu<Dim>(comm, output.path, piece.mesh, run.mesh.phases, options);
   else
     parallel::write_gathered<Dim>(comm, output.path, gathered, run.mesh.phases, options);
+  if (!meshed_coords.empty()) gathered.coords = std::move(meshed_coords);
   if (picture)
     parallel::run_collectively(comm, [&] {
       if (comm.rank() != 0) return;

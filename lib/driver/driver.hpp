@@ -112,6 +112,9 @@ struct Output {
   io::PlaneKind plane = io::PlaneKind::stress;  // 2D Abaqus elements (CPS3 / CPE3)
   bool pieces = false;
   std::vector<std::string> piece_paths;
+  // --explode F (> 1; one file): each phase region moved apart by mesh::exploded_coords in the
+  // written mesh only, without periodic constraints; picture, report and summary unchanged.
+  double explode = 0;
 };
 
 // Checks the requested output before any work (format; pieces or one gathered file).
