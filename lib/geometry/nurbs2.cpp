@@ -11,6 +11,7 @@
 #include <limits>
 
 #include "geometry/box_tests.hpp"
+#include "geometry/nurbs_bezier.hpp"
 #include "geometry/predicates2.hpp"
 
 namespace cisamr::geometry::nurbs {
@@ -21,20 +22,6 @@ constexpr int kMaxHom = 3 * (kMaxDegree + 1);
 using HomBuf = std::array<double, kMaxHom>;
 
 Vec2 cart(const double* h) { return {h[0] / h[2], h[1] / h[2]}; }
-
-void split_half(const double* h, int p, double* left, double* right) {
-  double tmp[kMaxHom];
-  std::copy(h, h + 3 * (p + 1), tmp);
-  for (int r = 0; r <= p; ++r) {
-    for (int c = 0; c < 3; ++c) {
-      left[3 * r + c] = tmp[c];
-      right[3 * (p - r) + c] = tmp[3 * (p - r) + c];
-    }
-    for (int i = 0; i < p - r; ++i)
-      for (int c = 0; c < 3; ++c) tmp[3 * i + c] = 0.5 * (tmp[3 * i + c] + tmp[3 * (i + 1) + c]);
-  }
-  // The shared middle point must be the same triple in both halves (it is: tmp[0] at r=p).
-}
 
 Box2 control_box(const double* h, int p) {
   Box2 b{cart(h), cart(h)};
@@ -67,16 +54,8 @@ double flatness(const double* h, int p) {
 
 // Point and derivative at s (homogeneous de Casteljau).
 void eval(const double* h, int p, double s, Vec2& c, Vec2& dc) {
-  double tmp[kMaxHom];
-  std::copy(h, h + 3 * (p + 1), tmp);
-  for (int r = 1; r < p; ++r)
-    for (int i = 0; i <= p - r; ++i)
-      for (int k = 0; k < 3; ++k) tmp[3 * i + k] = (1 - s) * tmp[3 * i + k] + s * tmp[3 * (i + 1) + k];
   double H[3], D[3];
-  for (int k = 0; k < 3; ++k) {
-    H[k] = (1 - s) * tmp[k] + s * tmp[3 + k];
-    D[k] = p * (tmp[3 + k] - tmp[k]);
-  }
+  eval_hom<3>(h, p, s, H, D);
   c = {H[0] / H[2], H[1] / H[2]};
   dc = {(D[0] - c[0] * D[2]) / H[2], (D[1] - c[1] * D[2]) / H[2]};
 }
@@ -97,7 +76,7 @@ int piece_parity(const Region& r, const double* h, const Vec2& p, int depth) {
   if (!in_box(p, b)) return ray_crosses(cart(h), cart(h + 3 * deg), p) ? 1 : 0;
   if (diag(b) <= r.on_tolerance || depth > 80) return -1;
   double left[kMaxHom], right[kMaxHom];
-  split_half(h, deg, left, right);
+  split_half<3>(h, deg, left, right);
   const int a = piece_parity(r, left, p, depth + 1);
   if (a < 0) return -1;
   const int c = piece_parity(r, right, p, depth + 1);
@@ -123,7 +102,7 @@ void piece_hits(const Region& r, const double* h, const Vec2& a, const Vec2& b, 
     return;
   }
   double left[kMaxHom], right[kMaxHom];
-  split_half(h, deg, left, right);
+  split_half<3>(h, deg, left, right);
   piece_hits(r, left, a, b, depth + 1, ts);
   piece_hits(r, right, a, b, depth + 1, ts);
 }
@@ -144,7 +123,7 @@ void piece_distance(const Region& r, const double* h, const Vec2& p, int depth, 
   }
   best = std::min({best, std::hypot(p[0] - u[0], p[1] - u[1]), std::hypot(p[0] - v[0], p[1] - v[1])});
   double left[kMaxHom], right[kMaxHom];
-  split_half(h, deg, left, right);
+  split_half<3>(h, deg, left, right);
   // Nearer half first: better pruning.
   const Vec2 m = cart(left + 3 * deg);
   const bool left_first = std::hypot(p[0] - u[0], p[1] - u[1]) + std::hypot(p[0] - m[0], p[1] - m[1]) <=
@@ -161,7 +140,7 @@ bool piece_touches(const Region& r, const double* h, const Box2& box, int depth)
   if (in_box(cart(h), box) || in_box(cart(h + 3 * deg), box)) return true;
   if (diag(bx) <= 1e-12 * r.size || depth > 80) return true;
   double left[kMaxHom], right[kMaxHom];
-  split_half(h, deg, left, right);
+  split_half<3>(h, deg, left, right);
   return piece_touches(r, left, box, depth + 1) || piece_touches(r, right, box, depth + 1);
 }
 
@@ -171,7 +150,7 @@ void piece_flatten(const Region& r, const double* h, double tol, int depth, std:
     return;
   }
   double left[kMaxHom], right[kMaxHom];
-  split_half(h, r.degree, left, right);
+  split_half<3>(h, r.degree, left, right);
   piece_flatten(r, left, tol, depth + 1, out);
   piece_flatten(r, right, tol, depth + 1, out);
 }
@@ -191,7 +170,7 @@ void coarse_split(const double* h, int p, double tol, int depth, std::vector<Pie
     return;
   }
   double left[kMaxHom], right[kMaxHom];
-  split_half(h, p, left, right);
+  split_half<3>(h, p, left, right);
   coarse_split(left, p, tol, depth + 1, out);
   coarse_split(right, p, tol, depth + 1, out);
 }
@@ -216,8 +195,7 @@ std::string build_region(const NurbsCurve& curve, Region& out) {
     if (!(w > 0) || !std::isfinite(w)) return ".weights: must be positive";
   for (const Vec2& q : curve.control_points)
     if (!std::isfinite(q[0]) || !std::isfinite(q[1])) return ".control_points: coordinates must be finite";
-  std::vector<double> U = curve.knots;
-  const double u_lo = U[p], u_hi = U[n];
+  const double u_lo = curve.knots[p], u_hi = curve.knots[n];
   if (!(u_lo < u_hi)) return ".knots: the curve's parameter range is empty";
   // Homogeneous control points.
   std::vector<std::array<double, 3>> P(n);
@@ -225,38 +203,8 @@ std::string build_region(const NurbsCurve& curve, Region& out) {
     const double w = curve.weights.empty() ? 1.0 : curve.weights[i];
     P[i] = {curve.control_points[i][0] * w, curve.control_points[i][1] * w, w};
   }
-  // Bézier extraction: raise every knot value in [u_lo, u_hi] to multiplicity ≥ p.
-  std::vector<double> values;
-  for (double u : U)
-    if (u >= u_lo && u <= u_hi && (values.empty() || values.back() != u)) values.push_back(u);
-  for (double u : values) {
-    int mult = static_cast<int>(std::count(U.begin(), U.end(), u));
-    for (; mult < p; ++mult) {
-      // Span k with U[k] ≤ u < U[k+1] (u = u_hi: the last non-empty span).
-      // Span k with U[k] ≤ u ≤ U[k+1] inside the domain: the one to the right of u_lo,
-      // to the left of every other value (keeps k ≤ n − 1 at u = u_hi).
-      const auto it = u == u_lo ? std::upper_bound(U.begin(), U.end(), u) : std::lower_bound(U.begin(), U.end(), u);
-      const std::size_t k = static_cast<std::size_t>(it - U.begin()) - 1;
-      std::vector<std::array<double, 3>> Q(P.size() + 1);
-      for (std::size_t i = 0; i < Q.size(); ++i) {
-        if (i + p <= k) Q[i] = P[i];
-        else if (i > k) Q[i] = P[i - 1];
-        else {
-          const double alpha = (u - U[i]) / (U[i + p] - U[i]);
-          for (int c = 0; c < 3; ++c) Q[i][c] = alpha * P[i][c] + (1 - alpha) * P[i - 1][c];
-        }
-      }
-      U.insert(U.begin() + static_cast<std::ptrdiff_t>(k) + 1, u);
-      P.swap(Q);
-    }
-  }
-  std::vector<std::vector<double>> beziers;
-  for (std::size_t k = static_cast<std::size_t>(p); k + 1 < U.size() && k < P.size(); ++k) {
-    if (!(U[k] < U[k + 1]) || U[k] < u_lo || U[k + 1] > u_hi) continue;
-    std::vector<double> h;
-    for (std::size_t i = k - p; i <= k; ++i) h.insert(h.end(), P[i].begin(), P[i].end());
-    beziers.push_back(std::move(h));
-  }
+  // Bézier extraction: every knot value in [u_lo, u_hi] raised to multiplicity ≥ p.
+  std::vector<std::vector<double>> beziers = extract_bezier<3>(p, curve.knots, std::move(P)).points;
   if (beziers.empty()) return ".knots: the curve has no non-empty knot span";
   // Size, closedness.
   Box2 box = control_box(beziers[0].data(), p);

@@ -13,10 +13,6 @@
 namespace cisamr::geometry::stl {
 namespace {
 
-constexpr int kLeafSize = 4;
-constexpr int kMaxStack = 128;
-
-
 Box3 face_box(const Mesh& m, std::int32_t f) {
   const auto& t = m.faces[f];
   Box3 b{m.vertices[t[0]], m.vertices[t[0]]};
@@ -31,67 +27,6 @@ Box3 face_box(const Mesh& m, std::int32_t f) {
 bool in_box(const Vec3& p, const Box3& b) {
   return p[0] >= b.min[0] && p[0] <= b.max[0] && p[1] >= b.min[1] && p[1] <= b.max[1] &&
          p[2] >= b.min[2] && p[2] <= b.max[2];
-}
-
-std::int32_t build_node(Mesh& m, const std::vector<Box3>& boxes, std::int32_t first, std::int32_t count) {
-  const std::int32_t id = static_cast<std::int32_t>(m.nodes.size());
-  m.nodes.push_back({});
-  Box3 b = boxes[m.order[first]];
-  Box3 cb{};  // box of the centroids
-  for (int k = 0; k < 3; ++k) cb.min[k] = cb.max[k] = 0.5 * (b.min[k] + b.max[k]);
-  for (std::int32_t i = first; i < first + count; ++i) {
-    const Box3& fb = boxes[m.order[i]];
-    for (int k = 0; k < 3; ++k) {
-      b.min[k] = std::min(b.min[k], fb.min[k]);
-      b.max[k] = std::max(b.max[k], fb.max[k]);
-      const double c = 0.5 * (fb.min[k] + fb.max[k]);
-      cb.min[k] = std::min(cb.min[k], c);
-      cb.max[k] = std::max(cb.max[k], c);
-    }
-  }
-  m.nodes[id].box = b;
-  if (count <= kLeafSize) {
-    m.nodes[id].first = first;
-    m.nodes[id].count = count;
-    return id;
-  }
-  int axis = 0;
-  for (int k = 1; k < 3; ++k)
-    if (cb.max[k] - cb.min[k] > cb.max[axis] - cb.min[axis]) axis = k;
-  const std::int32_t half = count / 2;
-  // Ties broken by face id so that the tree does not depend on the library's sort.
-  std::nth_element(m.order.begin() + first, m.order.begin() + first + half, m.order.begin() + first + count,
-                   [&](std::int32_t x, std::int32_t y) {
-                     const double cx = boxes[x].min[axis] + boxes[x].max[axis];
-                     const double cy = boxes[y].min[axis] + boxes[y].max[axis];
-                     return cx != cy ? cx < cy : x < y;
-                   });
-  const std::int32_t l = build_node(m, boxes, first, half);
-  const std::int32_t r = build_node(m, boxes, first + half, count - half);
-  m.nodes[id].left = l;
-  m.nodes[id].right = r;
-  return id;
-}
-
-// Visits the leaves whose box passes `enter`, calling `leaf_face` on each face; stops
-// when leaf_face returns true.
-template <class Enter, class Visit>
-void traverse(const Mesh& m, Enter&& enter, Visit&& leaf_face) {
-  if (m.nodes.empty()) return;
-  std::int32_t stack[kMaxStack];
-  int top = 0;
-  stack[top++] = 0;
-  while (top > 0) {
-    const Node& n = m.nodes[stack[--top]];
-    if (!enter(n.box)) continue;
-    if (n.count > 0) {
-      for (std::int32_t i = n.first; i < n.first + n.count; ++i)
-        if (leaf_face(m.order[i])) return;
-    } else {
-      stack[top++] = n.right;
-      stack[top++] = n.left;
-    }
-  }
 }
 
 Vec2 yz(const Vec3& v) { return {v[1], v[2]}; }
@@ -210,43 +145,13 @@ bool faces_conflict(const Mesh& m, std::int32_t f, std::int32_t g) {
          in_corner(b1, b2, a2);
 }
 
-}  // namespace
-
-std::string build(const StlSurface& s, Mesh& m, bool validate) {
-  m = Mesh{};
-  const std::size_t nf = s.triangles.size();
-  if (nf == 0) return "no triangles";
-  for (std::size_t f = 0; f < nf; ++f)
-    for (const Vec3& v : s.triangles[f])
-      if (!std::isfinite(v[0]) || !std::isfinite(v[1]) || !std::isfinite(v[2]))
-        return face_problem("coordinates must be finite", static_cast<std::int64_t>(f));
-  // Merge identical vertices (file coordinates, exact equality).
-  std::vector<std::int64_t> corner(3 * nf);
-  std::iota(corner.begin(), corner.end(), 0);
-  auto coord = [&](std::int64_t c) -> const Vec3& { return s.triangles[c / 3][c % 3]; };
-  std::sort(corner.begin(), corner.end(), [&](std::int64_t x, std::int64_t y) {
-    const Vec3 &a = coord(x), &b = coord(y);
-    return a != b ? a < b : x < y;
-  });
-  m.faces.assign(nf, {0, 0, 0});
-  for (std::size_t i = 0; i < corner.size(); ++i) {
-    if (i == 0 || coord(corner[i]) != coord(corner[i - 1])) {
-      const Vec3& v = coord(corner[i]);
-      Vec3 w{};
-      for (int r = 0; r < 3; ++r)
-        w[r] = s.rotation[r][0] * (s.scale * v[0]) + s.rotation[r][1] * (s.scale * v[1]) +
-               s.rotation[r][2] * (s.scale * v[2]) + s.translate[r];
-      m.vertices.push_back(w);
-    }
-    m.faces[corner[i] / 3][corner[i] % 3] = static_cast<std::int32_t>(m.vertices.size() - 1);
-  }
+// The hierarchy, box and size of an indexed mesh, then (with `validate`) its checks.
+std::string finish(Mesh& m, bool validate) {
+  const std::size_t nf = m.faces.size();
   std::vector<Box3> boxes(nf);
   for (std::size_t f = 0; f < nf; ++f) boxes[f] = face_box(m, static_cast<std::int32_t>(f));
-  m.order.resize(nf);
-  std::iota(m.order.begin(), m.order.end(), 0);
-  m.nodes.reserve(2 * nf / kLeafSize + 2);
-  build_node(m, boxes, 0, static_cast<std::int32_t>(nf));
-  m.box = m.nodes[0].box;
+  m.bvh.build(boxes);
+  m.box = m.bvh.box();
   m.size = std::sqrt(dot(sub(m.box.max, m.box.min), sub(m.box.max, m.box.min)));
   if (!validate) return "";
 
@@ -301,14 +206,62 @@ std::string build(const StlSurface& s, Mesh& m, bool validate) {
   return "";
 }
 
+}  // namespace
+
+std::string build(const StlSurface& s, Mesh& m, bool validate) {
+  m = Mesh{};
+  const std::size_t nf = s.triangles.size();
+  if (nf == 0) return "no triangles";
+  for (std::size_t f = 0; f < nf; ++f)
+    for (const Vec3& v : s.triangles[f])
+      if (!std::isfinite(v[0]) || !std::isfinite(v[1]) || !std::isfinite(v[2]))
+        return face_problem("coordinates must be finite", static_cast<std::int64_t>(f));
+  // Merge identical vertices (file coordinates, exact equality).
+  std::vector<std::int64_t> corner(3 * nf);
+  std::iota(corner.begin(), corner.end(), 0);
+  auto coord = [&](std::int64_t c) -> const Vec3& { return s.triangles[c / 3][c % 3]; };
+  std::sort(corner.begin(), corner.end(), [&](std::int64_t x, std::int64_t y) {
+    const Vec3 &a = coord(x), &b = coord(y);
+    return a != b ? a < b : x < y;
+  });
+  m.faces.assign(nf, {0, 0, 0});
+  for (std::size_t i = 0; i < corner.size(); ++i) {
+    if (i == 0 || coord(corner[i]) != coord(corner[i - 1])) {
+      const Vec3& v = coord(corner[i]);
+      Vec3 w{};
+      for (int r = 0; r < 3; ++r)
+        w[r] = s.rotation[r][0] * (s.scale * v[0]) + s.rotation[r][1] * (s.scale * v[1]) +
+               s.rotation[r][2] * (s.scale * v[2]) + s.translate[r];
+      m.vertices.push_back(w);
+    }
+    m.faces[corner[i] / 3][corner[i] % 3] = static_cast<std::int32_t>(m.vertices.size() - 1);
+  }
+  return finish(m, validate);
+}
+
+std::string build_indexed(std::vector<Vec3> vertices, std::vector<std::array<std::int32_t, 3>> faces, Mesh& m,
+                          bool validate) {
+  m = Mesh{};
+  if (faces.empty()) return "no triangles";
+  for (std::size_t f = 0; f < faces.size(); ++f)
+    for (std::int32_t v : faces[f]) {
+      if (v < 0 || static_cast<std::size_t>(v) >= vertices.size())
+        return face_problem("vertex index out of range", static_cast<std::int64_t>(f));
+      if (!std::isfinite(vertices[v][0]) || !std::isfinite(vertices[v][1]) || !std::isfinite(vertices[v][2]))
+        return face_problem("coordinates must be finite", static_cast<std::int64_t>(f));
+    }
+  m.vertices = std::move(vertices);
+  m.faces = std::move(faces);
+  return finish(m, validate);
+}
+
 int side(const Mesh& m, const Vec3& p) {
-  if (m.nodes.empty() || !in_box(p, m.box)) return -1;
+  if (m.bvh.empty() || !in_box(p, m.box)) return -1;
   bool inside = false, on = false;
   // Ray p + λ·(1, 0, 0), λ > 0, with p perturbed to (x, y + ε, z + ε²) in the (y, z)
   // tests: it never meets an edge or vertex, so the parity of the faces it pierces is
   // exact. A face holding p is found on the way (p lies in the closed projection).
-  traverse(
-      m,
+  m.bvh.traverse(
       [&](const Box3& b) {
         return p[1] >= b.min[1] && p[1] <= b.max[1] && p[2] >= b.min[2] && p[2] <= b.max[2] && p[0] <= b.max[0];
       },
@@ -342,7 +295,7 @@ int side(const Mesh& m, const Vec3& p) {
 }
 
 void segment_hits(const Mesh& m, const Vec3& a, const Vec3& b, std::vector<double>& ts) {
-  if (m.nodes.empty()) return;
+  if (m.bvh.empty()) return;
   const Vec3 d = sub(b, a);
   const double slack = 1e-12 * m.size;
   auto meets = [&](const Box3& bx) {
@@ -362,7 +315,7 @@ void segment_hits(const Mesh& m, const Vec3& a, const Vec3& b, std::vector<doubl
     }
     return true;
   };
-  traverse(m, meets, [&](std::int32_t f) {
+  m.bvh.traverse(meets, [&](std::int32_t f) {
     const auto& t = m.faces[f];
     const Vec3 &v0 = m.vertices[t[0]], &v1 = m.vertices[t[1]], &v2 = m.vertices[t[2]];
     for (int k = 0; k < 3; ++k) {
@@ -385,8 +338,8 @@ void segment_hits(const Mesh& m, const Vec3& a, const Vec3& b, std::vector<doubl
 
 bool touches_box(const Mesh& m, const Box3& box) {
   bool hit = false;
-  traverse(
-      m, [&](const Box3& b) { return boxes_overlap(b, box); },
+  m.bvh.traverse(
+      [&](const Box3& b) { return boxes_overlap(b, box); },
       [&](std::int32_t f) {
         const auto& t = m.faces[f];
         if (!boxes_overlap(face_box(m, f), box)) return false;
@@ -415,8 +368,7 @@ double surface_area(const Mesh& m) {
 
 double distance_to_surface(const Mesh& m, const Vec3& p) {
   double best2 = std::numeric_limits<double>::infinity();
-  traverse(
-      m,
+  m.bvh.traverse(
       [&](const Box3& b) {
         double d2 = 0;
         for (int k = 0; k < 3; ++k) {

@@ -9,21 +9,15 @@
 #include <vector>
 
 #include "core/types.hpp"
+#include "geometry/flat_bvh.hpp"
 #include "geometry/scene.hpp"
 
 namespace cisamr::geometry::stl {
 
-struct Node {
-  Box3 box;
-  std::int32_t first = 0, count = 0;  // leaf: faces order[first, first+count)
-  std::int32_t left = -1, right = -1; // inner node: children
-};
-
 struct Mesh {
   std::vector<Vec3> vertices;                      // after scale, rotation, translation
   std::vector<std::array<std::int32_t, 3>> faces;  // in file order
-  std::vector<Node> nodes;                         // nodes[0] is the root
-  std::vector<std::int32_t> order;                 // face ids in leaf order
+  FlatBvh<3> bvh;                                  // over the faces
   Box3 box;
   double size = 0;  // box diagonal
 };
@@ -31,6 +25,12 @@ struct Mesh {
 // Transforms, merges identical vertices and builds the hierarchy. With `validate`,
 // returns "" or the problem ("surface is not closed (face 3)"); without, never fails.
 std::string build(const StlSurface& surface, Mesh& out, bool validate);
+
+// The same from a mesh that is already indexed and placed (vertices used as given, faces
+// referring to them, no merging): the tessellations of NURBS and STEP bodies. Problems
+// name faces by their index in `faces`.
+std::string build_indexed(std::vector<Vec3> vertices, std::vector<std::array<std::int32_t, 3>> faces, Mesh& out,
+                          bool validate);
 
 // +1 inside, 0 on a face (exact), -1 outside.
 int side(const Mesh& m, const Vec3& p);
