@@ -86,8 +86,8 @@ TEST(MpiInvariance, PeriodicRandomScenes) {
 TEST(MpiInvariance, CohesiveScenes) {
   pipeline::Options options;
   options.cohesive = true;
-  std::vector<geometry::SceneDesc> scenes = {testing::corner_scene(), testing::periodic_plane_scene()};
-  for (unsigned seed = 1; seed <= 2; ++seed) scenes.push_back(testing::random_scene(seed));
+  // (The corner scene's partition corners are covered on one rank: test_parallel.cpp.)
+  std::vector<geometry::SceneDesc> scenes = {testing::periodic_plane_scene(), testing::random_scene(1)};
   scenes.push_back(cisamr::testing::periodic_scene(1));
   for (const geometry::SceneDesc& scene : scenes)
     for (int n : partition_counts()) {
