@@ -70,8 +70,13 @@ struct NurbsPatch {
   std::vector<Vec3> control_points;  // u fastest
   std::vector<double> weights;
 };
-struct NurbsSurface {
+struct NurbsSurface {  // closed: the patches together bound a volume
   std::vector<NurbsPatch> patches;
+  // Placement of the control points, as for STL: x' = rotation·(scale·x) + translate
+  // (weights unchanged: rational B-splines are invariant under affine maps).
+  double scale = 1;
+  Rotation3 rotation{{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}};
+  Vec3 translate{};
 };
 
 using Shape = std::variant<Circle, Ellipse, Polygon, NurbsCurve, Sphere, Ellipsoid, Cylinder,
