@@ -55,6 +55,15 @@ class FieldReader {
   virtual std::vector<Vec2> points2(std::string_view key) const = 0;    // arrays of 2 numbers
   virtual std::vector<Vec3> points3(std::string_view key) const = 0;    // arrays of 3 numbers
   virtual Rotation3 rotation(std::string_view key) const = 0;           // proper, orthonormal
+  // A NURBS control net of count_u × count_v points (the counts follow from the knots),
+  // returned u fastest. Written either as count_v rows of count_u points
+  // ([[[x, y, z], …], …]; errors name "key[j][i]") or as one flat list u fastest (errors
+  // name "key[k]"); a wrong shape names the counts ("expected 7 rows of 9 points (from the
+  // knots), got 6 rows").
+  virtual std::vector<Vec3> point_grid3(std::string_view key, std::size_t count_u, std::size_t count_v) const = 0;
+  // The same two layouts for finite numbers (the net's weights), each > 0 when `positive`.
+  virtual std::vector<double> number_grid(std::string_view key, std::size_t count_u, std::size_t count_v,
+                                          bool positive) const = 0;
   // Each element of an array of objects, read by `read_one`.
   virtual void objects(std::string_view key, const std::function<void(const FieldReader&)>& read_one) const = 0;
   // A triangulated surface file (STL): a non-empty name, resolved; loaded or only checked

@@ -17,6 +17,8 @@ namespace {
 
 [[noreturn]] void not_implemented() { throw std::logic_error("not implemented yet"); }
 
+// One patch: degrees, knots (the counts follow from them), the control net and its
+// weights, each as count_v rows of count_u or one flat list u fastest (FieldReader grids).
 NurbsPatch read_patch(const FieldReader& f) {
   f.allow_keys({"degree", "knots_u", "knots_v", "control_points", "weights"});
   NurbsPatch p;
@@ -32,14 +34,20 @@ NurbsPatch read_patch(const FieldReader& f) {
     (a == 0 ? p.knots_u : p.knots_v) = read_knots(f, key, p.degree[a], 0);
     counts[a] = size - static_cast<std::size_t>(p.degree[a]) - 1;
   }
-  p.control_points = f.points3("control_points");
-  const std::size_t expected = counts[0] * counts[1];
-  if (p.control_points.size() != expected)
-    f.fail("control_points", "the knot vectors give " + std::to_string(counts[0]) + " × " + std::to_string(counts[1]) +
-                                 " = " + std::to_string(expected) + " control points (u fastest), got " +
-                                 std::to_string(p.control_points.size()));
-  p.weights = read_weights(f, "weights", expected);
+  p.control_points = f.point_grid3("control_points", counts[0], counts[1]);
+  if (f.has("weights")) p.weights = f.number_grid("weights", counts[0], counts[1], /*positive=*/true);
   return p;
+}
+
+// The control point x placed as the body places it: rotation·(scale·x) + translate, in the
+// operation order of the STL vertices (stl_mesh.cpp), so that boxes agree with the body bit
+// for bit.
+Vec3 placed(const NurbsSurface& s, const Vec3& x) {
+  Vec3 y;
+  for (int r = 0; r < 3; ++r)
+    y[r] = s.rotation[r][0] * (s.scale * x[0]) + s.rotation[r][1] * (s.scale * x[1]) +
+           s.rotation[r][2] * (s.scale * x[2]) + s.translate[r];
+  return y;
 }
 
 class NurbsSurfaceFamily final : public FamilyOf<NurbsSurface> {
@@ -47,16 +55,24 @@ class NurbsSurfaceFamily final : public FamilyOf<NurbsSurface> {
   std::string_view name() const override { return "nurbs_surface"; }
   int dimension() const override { return 3; }
   Shape read(const FieldReader& f) const override {
-    f.allow_keys({"patches"});
+    f.allow_keys({"patches", "scale", "rotation", "translate"});
     NurbsSurface surface;
     if (f.array_size("patches") == 0) f.fail("patches", "needs at least one patch");
     f.objects("patches", [&](const FieldReader& patch) { surface.patches.push_back(read_patch(patch)); });
+    if (f.has("scale")) surface.scale = f.positive("scale");
+    if (f.has("rotation")) surface.rotation = f.rotation("rotation");
+    if (f.has("translate")) surface.translate = f.vec<3>("translate");
     return surface;
   }
-  void write(const Shape& s, FieldWriter& f) const override {
-    const std::vector<NurbsPatch>& patches = of(s).patches;
-    f.objects("patches", patches.size(), [&](FieldWriter& w, std::size_t i) {
-      const NurbsPatch& p = patches[i];
+  // The flat form (u fastest) and the placement where it is not the default, as for STL:
+  // reading it back gives the same descriptor bit for bit.
+  void write(const Shape& shape, FieldWriter& f) const override {
+    const NurbsSurface& s = of(shape);
+    if (s.scale != 1) f.number("scale", s.scale);
+    if (!is_identity(s.rotation)) f.rotation("rotation", s.rotation);
+    if (s.translate != Vec3{0, 0, 0}) f.vec("translate", s.translate);
+    f.objects("patches", s.patches.size(), [&](FieldWriter& w, std::size_t i) {
+      const NurbsPatch& p = s.patches[i];
       w.integers("degree", {p.degree[0], p.degree[1]});
       w.numbers("knots_u", p.knots_u);
       w.numbers("knots_v", p.knots_v);
@@ -65,11 +81,14 @@ class NurbsSurfaceFamily final : public FamilyOf<NurbsSurface> {
     });
   }
   Box3 bounding_box(const Shape&) const override { not_implemented(); }
+  // The box of the placed control points: with positive weights it holds the surface.
   Box3 holding_box(const Shape& s) const override {
     Box3 b{{INFINITY, INFINITY, INFINITY}, {-INFINITY, -INFINITY, -INFINITY}};
     for (const NurbsPatch& patch : of(s).patches)
-      for (const Vec3& p : patch.control_points)
+      for (const Vec3& x : patch.control_points) {
+        const Vec3 p = placed(of(s), x);
         for (int d = 0; d < 3; ++d) b.min[d] = std::min(b.min[d], p[d]), b.max[d] = std::max(b.max[d], p[d]);
+      }
     return b;
   }
   double measure(const Shape&) const override { not_implemented(); }
@@ -77,9 +96,7 @@ class NurbsSurfaceFamily final : public FamilyOf<NurbsSurface> {
   std::vector<Vec3> boundary_samples(const Shape&, double) const override { not_implemented(); }
   bool contains(const Shape&, const Vec3&) const override { not_implemented(); }
   void translate(Shape& s, const Vec3& o) const override {
-    for (NurbsPatch& p : of(s).patches)
-      for (Vec3& v : p.control_points)
-        for (int k = 0; k < 3; ++k) v[k] += o[k];
+    for (int k = 0; k < 3; ++k) of(s).translate[k] += o[k];
   }
   bool judged_by_box() const override { return true; }
   std::unique_ptr<SurfaceModel> surface_model(const Shape&, const std::string& source,

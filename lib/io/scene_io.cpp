@@ -283,6 +283,55 @@ class SceneReader {
     return result;
   }
 
+  // A control net of count_u × count_v elements, u fastest: count_v rows of count_u
+  // elements or one flat list. Rows are recognised by their first element being an array
+  // of arrays (points) or an array (numbers); read_one(element, field) reads one element.
+  template <class T, class ReadOne>
+  std::vector<T> grid(const json& v, const std::string& field, std::size_t count_u, std::size_t count_v,
+                      bool element_is_array, std::string_view noun, const ReadOne& read_one) const {
+    expect_array(v, field);
+    const auto is_row = [&](const json& e) {
+      return e.is_array() && (!element_is_array || (!e.empty() && e[0].is_array()));
+    };
+    const std::string counts = std::to_string(count_v) + " rows of " + std::to_string(count_u) + " " +
+                               std::string(noun);
+    std::vector<T> result;  // grows with the elements present (the counts may be huge)
+    if (!v.empty() && is_row(v[0])) {
+      if (v.size() != count_v)
+        fail(field, "expected " + counts + " (from the knots), got " + std::to_string(v.size()) +
+                        (v.size() == 1 ? " row" : " rows"));
+      for (std::size_t j = 0; j < count_v; ++j) {
+        const std::string row = index(field, j);
+        if (!v[j].is_array())
+          fail(row, "expected a row of " + std::to_string(count_u) + " " + std::string(noun) + ", got " +
+                        type_text(v[j]));
+        if (v[j].size() != count_u)
+          fail(row, "expected a row of " + std::to_string(count_u) + " " + std::string(noun) +
+                        " (from the knots), got " + std::to_string(v[j].size()));
+        for (std::size_t i = 0; i < count_u; ++i) result.push_back(read_one(v[j][i], index(row, i)));
+      }
+      return result;
+    }
+    if (v.size() != count_u * count_v)
+      fail(field, "expected " + counts + ", or " + std::to_string(count_u) + " × " + std::to_string(count_v) +
+                      " = " + std::to_string(count_u * count_v) + " " + std::string(noun) +
+                      " u fastest (from the knots), got " + std::to_string(v.size()) + " " + std::string(noun));
+    result.reserve(v.size());
+    for (std::size_t k = 0; k < v.size(); ++k) result.push_back(read_one(v[k], index(field, k)));
+    return result;
+  }
+  std::vector<Vec3> point_grid3(const json& v, const std::string& field, std::size_t count_u,
+                                std::size_t count_v) const {
+    return grid<Vec3>(v, field, count_u, count_v, true, "points",
+                      [&](const json& e, const std::string& f) { return vec<3>(e, f); });
+  }
+  std::vector<double> number_grid(const json& v, const std::string& field, std::size_t count_u,
+                                  std::size_t count_v, bool positive_only) const {
+    return grid<double>(v, field, count_u, count_v, false, "numbers", [&](const json& e, const std::string& f) {
+      return positive_only ? positive(e, f) : number(e, f);
+    });
+  }
+
   Rotation3 rotation(const json& v, const std::string& field) const {
     if (!v.is_array() || v.size() != 3)
       fail(field, "expected a 3×3 matrix (an array of 3 rows of 3 numbers)");
@@ -377,6 +426,13 @@ class JsonFieldReader final : public FieldReader {
   std::vector<Vec2> points2(std::string_view key) const override { return reader_.points<2>(get(key), path(key)); }
   std::vector<Vec3> points3(std::string_view key) const override { return reader_.points<3>(get(key), path(key)); }
   Rotation3 rotation(std::string_view key) const override { return reader_.rotation(get(key), path(key)); }
+  std::vector<Vec3> point_grid3(std::string_view key, std::size_t count_u, std::size_t count_v) const override {
+    return reader_.point_grid3(get(key), path(key), count_u, count_v);
+  }
+  std::vector<double> number_grid(std::string_view key, std::size_t count_u, std::size_t count_v,
+                                  bool positive) const override {
+    return reader_.number_grid(get(key), path(key), count_u, count_v, positive);
+  }
   void objects(std::string_view key, const std::function<void(const FieldReader&)>& read_one) const override {
     const json& v = get(key);
     const std::string field = path(key);

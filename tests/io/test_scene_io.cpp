@@ -8,7 +8,9 @@
 #include <sys/stat.h>
 
 #include "core/error.hpp"
+#include "geometry/shapes.hpp"
 #include "io/stl_io.hpp"
+#include "support/random_nurbs3.hpp"
 #include "temp_dir.hpp"
 
 namespace cisamr::io {
@@ -69,7 +71,10 @@ bool same(const NurbsPatch& a, const NurbsPatch& b) {
   return a.degree == b.degree && same(a.knots_u, b.knots_u) && same(a.knots_v, b.knots_v) &&
          same(a.control_points, b.control_points) && same(a.weights, b.weights);
 }
-bool same(const NurbsSurface& a, const NurbsSurface& b) { return same(a.patches, b.patches); }
+bool same(const NurbsSurface& a, const NurbsSurface& b) {
+  return same(a.patches, b.patches) && same(a.scale, b.scale) && same(a.rotation, b.rotation) &&
+         same(a.translate, b.translate);
+}
 bool same(const Shape& a, const Shape& b) {
   if (a.index() != b.index()) return false;
   return std::visit(
@@ -226,6 +231,11 @@ SceneDesc full_3d_scene(const std::string& stl_path) {
   NurbsPatch plain = patch;
   plain.weights.clear();
   s.inclusions.push_back({NurbsSurface{{patch, plain}}, 2, 3});
+  NurbsSurface placed{{plain}};
+  placed.scale = 1.0 / 3.0;
+  placed.rotation = rz;
+  placed.translate = {50.125, 1e-3 / 7, 12.5};
+  s.inclusions.push_back({placed, 2, 0});
   return s;
 }
 
@@ -394,7 +404,7 @@ std::vector<BadScene> bad_scenes() {
       {"nurbs surface control point count", scene3(R"({"shape": "nurbs_surface", "patches": [
          {"degree": [1, 1], "knots_u": [0, 0, 1, 1], "knots_v": [0, 0, 1, 1],
           "control_points": [[0, 0, 0], [1, 0, 0], [0, 1, 0]]}]})"),
-       "inclusions[0].patches[0].control_points", "2 × 2 = 4 control points"},
+       "inclusions[0].patches[0].control_points", "2 × 2 = 4 points u fastest (from the knots), got 3 points"},
       {"nurbs surface degree pair", scene3(R"({"shape": "nurbs_surface", "patches": [
          {"degree": 1, "knots_u": [0, 0, 1, 1], "knots_v": [0, 0, 1, 1], "control_points": []}]})"),
        "inclusions[0].patches[0].degree", "array of 2 integers"},
@@ -415,6 +425,207 @@ TEST(SceneIo, MalformedScenesNameTheField) {
       EXPECT_EQ(e.file(), "bad.json") << c.name;
       EXPECT_EQ(e.field(), c.field) << c.name << ": " << e.what();
       EXPECT_NE(e.problem().find(c.problem), std::string::npos) << c.name << ": " << e.what();
+    }
+  }
+}
+
+// ---- nurbs_surface: control nets as rows or flat, placement, errors naming the field
+
+// One patch of degree (1, 1) with 3 × 2 control points (from the knots), then `tail`.
+const std::string kNurbsKnots = R"("degree": [1, 1], "knots_u": [0, 0, 0.5, 1, 1], "knots_v": [0, 0, 1, 1])";
+const std::string kNurbsRows = "[[[0, 0, 0], [1, 0, 0], [2, 0, 0]], [[0, 1, 0], [1, 1, 0], [2, 1, 1]]]";
+const std::string kNurbsFlat = "[[0, 0, 0], [1, 0, 0], [2, 0, 0], [0, 1, 0], [1, 1, 0], [2, 1, 1]]";
+std::string nurbs_scene(const std::string& tail, const std::string& extra = "") {
+  return scene3(R"({"shape": "nurbs_surface")" + extra + R"(, "patches": [{)" + kNurbsKnots + ", " + tail + "}]}");
+}
+// Two patches, the second with `tail`: errors name patches[1].
+std::string nurbs_scene2(const std::string& tail) {
+  return scene3(R"({"shape": "nurbs_surface", "patches": [{)" + kNurbsKnots + R"(, "control_points": )" + kNurbsFlat +
+                "}, {" + kNurbsKnots + ", " + tail + "}]}");
+}
+
+NurbsPatch nurbs_expected(bool weights) {
+  NurbsPatch p;
+  p.degree = {1, 1};
+  p.knots_u = {0, 0, 0.5, 1, 1};
+  p.knots_v = {0, 0, 1, 1};
+  p.control_points = {{0, 0, 0}, {1, 0, 0}, {2, 0, 0}, {0, 1, 0}, {1, 1, 0}, {2, 1, 1}};
+  if (weights) p.weights = {1, 0.5, 1, 0.25, 1, 2};
+  return p;
+}
+
+TEST(SceneIo, NurbsSurfaceNetsAsRowsOrFlatGiveTheSameDescriptor) {
+  const std::string weight_rows = "[[1, 0.5, 1], [0.25, 1, 2]]", weight_flat = "[1, 0.5, 1, 0.25, 1, 2]";
+  NurbsSurface expected{{nurbs_expected(true)}};
+  for (const std::string& points : {kNurbsRows, kNurbsFlat})
+    for (const std::string& weights : {weight_rows, weight_flat}) {
+      const SceneDesc s =
+          parse_scene(nurbs_scene(R"("control_points": )" + points + R"(, "weights": )" + weights), "n.json");
+      ASSERT_EQ(s.inclusions.size(), 1u);
+      EXPECT_TRUE(same(std::get<NurbsSurface>(s.inclusions[0].shape), expected)) << points << " " << weights;
+    }
+  for (const std::string& points : {kNurbsRows, kNurbsFlat}) {  // no weights: all 1
+    const SceneDesc s = parse_scene(nurbs_scene(R"("control_points": )" + points), "n.json");
+    EXPECT_TRUE(same(std::get<NurbsSurface>(s.inclusions[0].shape), NurbsSurface{{nurbs_expected(false)}}));
+  }
+}
+
+TEST(SceneIo, NurbsSurfacePlacementRoundTripsAndMovesTheBox) {
+  TempDir dir;
+  const SceneDesc s = parse_scene(
+      nurbs_scene(R"("control_points": )" + kNurbsRows + R"(, "weights": [[1, 0.5, 1], [0.25, 1, 2]])",
+                  R"(, "scale": 2, "rotation": [[0, -1, 0], [1, 0, 0], [0, 0, 1]], "translate": [10, 20, 30])"),
+      dir.file("scene.json"));
+  const auto& n = std::get<NurbsSurface>(s.inclusions[0].shape);
+  EXPECT_EQ(n.scale, 2);
+  EXPECT_TRUE(same(n.rotation, Rotation3{{{0, -1, 0}, {1, 0, 0}, {0, 0, 1}}}));
+  EXPECT_TRUE(same(n.translate, Vec3{10, 20, 30}));
+  EXPECT_TRUE(same(n.patches, std::vector<NurbsPatch>{nurbs_expected(true)}));  // the net as read, not placed
+
+  // Written flat with the placement; read back bit for bit; the same text again.
+  write_scene(dir.file("out.json"), s);
+  const std::string text = read_text(dir.file("out.json"));
+  for (const char* key : {"\"scale\": 2", "\"rotation\": [[0", "\"translate\": [10"})
+    EXPECT_NE(text.find(key), std::string::npos) << key << "\n" << text;
+  const std::size_t net = text.find("\"control_points\": [");
+  ASSERT_NE(net, std::string::npos) << text;
+  const std::size_t first = text.find_first_not_of(" \n", net + 19);  // the first point, not a row
+  EXPECT_EQ(text.substr(first, 2), "[0") << text;
+  const SceneDesc back = read_scene(dir.file("out.json"));
+  expect_same_scene(s, back);
+  EXPECT_EQ(scene_to_json(back, dir.file("out.json")), text);
+
+  // Defaults are not written.
+  const SceneDesc plain = parse_scene(nurbs_scene(R"("control_points": )" + kNurbsRows), "");
+  const std::string plain_text = scene_to_json(plain, dir.file("plain.json"));
+  for (const char* key : {"scale", "rotation", "translate", "weights"})
+    EXPECT_EQ(plain_text.find(key), std::string::npos) << key << "\n" << plain_text;
+
+  // The holding box is the placed net's (x' = R·(2x) + t: x' = 10 − 2y, y' = 20 + 2x,
+  // z' = 30 + 2z); translating moves the placement, not the net.
+  const Box3 box = shape_holding_box(s.inclusions[0].shape);
+  EXPECT_TRUE(same(box.min, Vec3{8, 20, 30})) << box.min[0] << " " << box.min[1] << " " << box.min[2];
+  EXPECT_TRUE(same(box.max, Vec3{10, 24, 32})) << box.max[0] << " " << box.max[1] << " " << box.max[2];
+  const Shape moved = translated(s.inclusions[0].shape, {1, -2, 0.5});
+  const auto& m = std::get<NurbsSurface>(moved);
+  EXPECT_TRUE(same(m.translate, Vec3{11, 18, 30.5}));
+  EXPECT_TRUE(same(m.patches, n.patches));
+  EXPECT_TRUE(same(shape_holding_box(moved).min, Vec3{9, 18, 30.5}));
+  EXPECT_TRUE(same(shape_holding_box(moved).max, Vec3{11, 22, 32.5}));
+}
+
+// The fixtures of data/shapes/make_nurbs.py are scene-ready entries, equal to the shapes of
+// tests/support/random_nurbs3.hpp bit for bit, and round-trip.
+TEST(SceneIo, NurbsFixturesReadAsTheExactShapes) {
+  namespace rn = ::cisamr::testing::nurbs3;
+  TempDir dir;
+  const auto fixture = [&](const char* name) {
+    const std::string entry = read_text(std::string(CISAMR_SOURCE_DIR) + "/data/shapes/" + name);
+    EXPECT_FALSE(entry.empty()) << name;
+    const SceneDesc s = parse_scene(scene3(entry), name);
+    write_scene(dir.file("out.json"), s);
+    expect_same_scene(s, read_scene(dir.file("out.json")));
+    return std::get<NurbsSurface>(s.inclusions.at(0).shape);
+  };
+  EXPECT_TRUE(same(fixture("nurbs_sphere.json"), rn::exact_sphere({0, 0, 0}, 1)));
+  EXPECT_TRUE(same(fixture("nurbs_torus.json"), rn::exact_torus({0, 0, 0}, 1, 0.3)));
+  EXPECT_TRUE(same(fixture("nurbs_cubesphere.json"), rn::cube_sphere({0, 0, 0}, 1)));
+  // The two-patch sphere: the one patch's columns 0–4 and 4–8.
+  const NurbsSurface two = fixture("nurbs_sphere2.json");
+  const NurbsPatch one = rn::exact_sphere({0, 0, 0}, 1).patches[0];
+  ASSERT_EQ(two.patches.size(), 2u);
+  for (std::size_t h = 0; h < 2; ++h) {
+    NurbsPatch half = one;
+    half.knots_u = {0, 0, 0, 0.5, 0.5, 1, 1, 1};
+    half.control_points.clear();
+    half.weights.clear();
+    for (std::size_t j = 0; j < 5; ++j)
+      for (std::size_t i = 4 * h; i <= 4 * h + 4; ++i) {
+        half.control_points.push_back(one.control_points[i + 9 * j]);
+        half.weights.push_back(one.weights[i + 9 * j]);
+      }
+    EXPECT_TRUE(same(two.patches[h], half)) << h;
+  }
+}
+
+std::vector<BadScene> bad_nurbs_surfaces() {
+  const std::string rows = R"("control_points": )" + kNurbsRows;
+  return {
+      {"no patches", scene3(R"({"shape": "nurbs_surface", "patches": []})"), "inclusions[0].patches",
+       "needs at least one patch"},
+      {"degree 31", scene3(R"({"shape": "nurbs_surface", "patches": [{"degree": [1, 31], "knots_u": [0, 0, 1, 1],
+         "knots_v": [0, 0, 1, 1], "control_points": []}]})"), "inclusions[0].patches[0].degree[1]", "between 1 and 30"},
+      {"too few knots", scene3(R"({"shape": "nurbs_surface", "patches": [{"degree": [2, 1], "knots_u": [0, 0, 1, 1],
+         "knots_v": [0, 0, 1, 1], "control_points": []}]})"), "inclusions[0].patches[0].knots_u",
+       "a degree-2 direction needs at least 6 knots, got 4"},
+      {"decreasing knots", scene3(R"({"shape": "nurbs_surface", "patches": [{"degree": [1, 1], "knots_u": [0, 0, 1, 1],
+         "knots_v": [0, 0, 0.5, 0.25, 1, 1], "control_points": []}]})"), "inclusions[0].patches[0].knots_v[3]",
+       "knots decrease (0.25 after 0.5)"},
+      {"empty parameter range", scene3(R"({"shape": "nurbs_surface", "patches": [{"degree": [1, 1], "knots_u": [0, 0, 0, 0],
+         "knots_v": [0, 0, 1, 1], "control_points": []}]})"), "inclusions[0].patches[0].knots_u", "empty parameter range"},
+      {"missing net", nurbs_scene(R"("weights": [1, 1, 1, 1, 1, 1])"), "inclusions[0].patches[0].control_points",
+       "missing required field"},
+      {"net not an array", nurbs_scene(R"("control_points": {})"), "inclusions[0].patches[0].control_points",
+       "expected an array, got an object"},
+      {"too few rows", nurbs_scene(R"("control_points": [[[0, 0, 0], [1, 0, 0], [2, 0, 0]]])"),
+       "inclusions[0].patches[0].control_points", "expected 2 rows of 3 points (from the knots), got 1 row"},
+      {"too few rows, second patch", nurbs_scene2(R"("control_points": [[[0, 0, 0], [1, 0, 0], [2, 0, 0]]])"),
+       "inclusions[0].patches[1].control_points", "expected 2 rows of 3 points (from the knots), got 1 row"},
+      {"too many rows", nurbs_scene(R"("control_points": [[[0, 0, 0]], [[0, 0, 0]], [[0, 0, 0]]])"),
+       "inclusions[0].patches[0].control_points", "expected 2 rows of 3 points (from the knots), got 3 rows"},
+      {"short row", nurbs_scene(R"("control_points": [[[0, 0, 0], [1, 0, 0], [2, 0, 0]], [[0, 1, 0], [1, 1, 0]]])"),
+       "inclusions[0].patches[0].control_points[1]", "expected a row of 3 points (from the knots), got 2"},
+      {"row not an array", nurbs_scene(R"("control_points": [[[0, 0, 0], [1, 0, 0], [2, 0, 0]], 5])"),
+       "inclusions[0].patches[0].control_points[1]", "expected a row of 3 points, got a number"},
+      {"bad point in a row", nurbs_scene(R"("control_points": [[[0, 0, 0], [1, 0, 0], [2, 0, 0]], [[0, 1, 0], [1, 1], [2, 1, 1]]])"),
+       "inclusions[0].patches[0].control_points[1][1]", "expected an array of 3 numbers, got an array of 2"},
+      {"bad coordinate in a row", nurbs_scene2(R"("control_points": [[[0, 0, 0], [1, 0, 0], [2, 0, 0]], [[0, 1, 0], [1, 1, 0], [2, "1", 1]]])"),
+       "inclusions[0].patches[1].control_points[1][2][1]", "expected a number, got a string"},
+      {"flat list too short", nurbs_scene(R"("control_points": [[0, 0, 0], [1, 0, 0], [2, 0, 0], [0, 1, 0], [1, 1, 0]])"),
+       "inclusions[0].patches[0].control_points", "expected 2 rows of 3 points, or 3 × 2 = 6 points u fastest (from the knots), got 5 points"},
+      {"bad point in the flat list", nurbs_scene(R"("control_points": [[0, 0, 0], [1, 0, 0], [2, 0, 0], [0, 1, 0], [1, 1], [2, 1, 1]])"),
+       "inclusions[0].patches[0].control_points[4]", "expected an array of 3 numbers, got an array of 2"},
+      {"too few weight rows", nurbs_scene(rows + R"(, "weights": [[1, 1, 1]])"), "inclusions[0].patches[0].weights",
+       "expected 2 rows of 3 numbers (from the knots), got 1 row"},
+      {"short weight row", nurbs_scene(rows + R"(, "weights": [[1, 1, 1], [1, 1]])"), "inclusions[0].patches[0].weights[1]",
+       "expected a row of 3 numbers (from the knots), got 2"},
+      {"weight row not an array", nurbs_scene(rows + R"(, "weights": [[1, 1, 1], 1])"), "inclusions[0].patches[0].weights[1]",
+       "expected a row of 3 numbers, got a number"},
+      {"zero weight in a row", nurbs_scene2(rows + R"(, "weights": [[1, 1, 1], [1, 0, 1]])"),
+       "inclusions[0].patches[1].weights[1][1]", "must be positive (got 0)"},
+      {"weight not a number", nurbs_scene(rows + R"(, "weights": [[1, 1, 1], [1, 1, null]])"),
+       "inclusions[0].patches[0].weights[1][2]", "expected a number, got null"},
+      {"weight overflow", nurbs_scene(rows + R"(, "weights": [[1, 1, 1], [1, 1, 1e400]])"),
+       "inclusions[0].patches[0].weights[1][2]", "number overflow"},
+      {"negative weight in the flat list", nurbs_scene(rows + R"(, "weights": [1, 1, 1, 1, -2, 1])"),
+       "inclusions[0].patches[0].weights[4]", "must be positive (got -2)"},
+      {"flat weights too many", nurbs_scene(rows + R"(, "weights": [1, 1, 1, 1, 1, 1, 1])"), "inclusions[0].patches[0].weights",
+       "expected 2 rows of 3 numbers, or 3 × 2 = 6 numbers u fastest (from the knots), got 7 numbers"},
+      {"misspelt patch key", nurbs_scene(rows + R"(, "weight": [1, 1, 1, 1, 1, 1])"), "inclusions[0].patches[0].weight",
+       "unknown key 'weight' (did you mean 'weights'?)"},
+      {"zero scale", nurbs_scene(rows, R"(, "scale": 0)"), "inclusions[0].scale", "must be positive (got 0)"},
+      {"scale not a number", nurbs_scene(rows, R"(, "scale": [2])"), "inclusions[0].scale", "expected a number"},
+      {"rotation not orthonormal", nurbs_scene(rows, R"(, "rotation": [[1, 0, 0], [0, 2, 0], [0, 0, 1]])"),
+       "inclusions[0].rotation", "not an orthonormal matrix"},
+      {"rotation a reflection", nurbs_scene(rows, R"(, "rotation": [[0, 1, 0], [1, 0, 0], [0, 0, 1]])"),
+       "inclusions[0].rotation", "reflection"},
+      {"translate of 2 numbers", nurbs_scene(rows, R"(, "translate": [1, 2])"), "inclusions[0].translate",
+       "expected an array of 3 numbers, got an array of 2"},
+      {"misspelt inclusion key", nurbs_scene(rows, R"(, "translates": [1, 2, 3])"), "inclusions[0].translates",
+       "unknown key 'translates' (did you mean 'translate'?)"},
+  };
+}
+
+TEST(SceneIo, MalformedNurbsSurfacesNameTheField) {
+  for (const BadScene& c : bad_nurbs_surfaces()) {
+    try {
+      parse_scene(c.text, "bad.json");
+      ADD_FAILURE() << c.name << ": no error";
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.file(), "bad.json") << c.name;
+      EXPECT_EQ(e.field(), c.field) << c.name << ": " << e.what();
+      EXPECT_NE(e.problem().find(c.problem), std::string::npos) << c.name << ": " << e.what();
+      EXPECT_EQ(std::string(e.what()).find('\n'), std::string::npos) << c.name;
     }
   }
 }
