@@ -107,4 +107,16 @@ void eval_hom(const double* h, int p, double s, double* H, double* D) {
   }
 }
 
+// 16-point Gauss–Legendre on [0, 1] (the areas and volumes of curves and surfaces).
+template <class F>
+double gauss16(F&& f) {
+  static const double x[8] = {0.0950125098376374, 0.2816035507792589, 0.4580167776572274, 0.6178762444026438,
+                              0.7554044083550030, 0.8656312023878318, 0.9445750230732326, 0.9894009349916499};
+  static const double w[8] = {0.1894506104550685, 0.1826034150449236, 0.1691565193950025, 0.1495959888165767,
+                              0.1246289712555339, 0.0951585116824928, 0.0622535239386479, 0.0271524594117541};
+  double s = 0;
+  for (int i = 0; i < 8; ++i) s += w[i] * (f(0.5 - 0.5 * x[i]) + f(0.5 + 0.5 * x[i]));
+  return 0.5 * s;
+}
+
 }  // namespace cisamr::geometry::nurbs

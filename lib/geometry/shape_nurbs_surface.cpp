@@ -1,21 +1,23 @@
-// NURBS surfaces: the descriptor moves; everything that needs the surface's geometry
-// is not implemented yet (std::logic_error), and the oracle refuses the shape.
+// NURBS surfaces: the scene members, and the questions about a descriptor, answered on the
+// exact surface through its body (surface_body.hpp); the oracle's model is
+// nurbs_surface_model.cpp.
 #include "geometry/shape_nurbs_surface.hpp"
 
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <optional>
 #include <stdexcept>
 
 #include "core/error.hpp"
 #include "geometry/shape_fields.hpp"
 #include "geometry/shape_nurbs_curve.hpp"
+#include "geometry/nurbs_surface_model.hpp"
 #include "geometry/shape_model.hpp"
+#include "geometry/surface_body.hpp"
 
 namespace cisamr::geometry {
 namespace {
-
-[[noreturn]] void not_implemented() { throw std::logic_error("not implemented yet"); }
 
 // One patch: degrees, knots (the counts follow from them), the control net and its
 // weights, each as count_v rows of count_u or one flat list u fastest (FieldReader grids).
@@ -37,17 +39,6 @@ NurbsPatch read_patch(const FieldReader& f) {
   p.control_points = f.point_grid3("control_points", counts[0], counts[1]);
   if (f.has("weights")) p.weights = f.number_grid("weights", counts[0], counts[1], /*positive=*/true);
   return p;
-}
-
-// The control point x placed as the body places it: rotation·(scale·x) + translate, in the
-// operation order of the STL vertices (stl_mesh.cpp), so that boxes agree with the body bit
-// for bit.
-Vec3 placed(const NurbsSurface& s, const Vec3& x) {
-  Vec3 y;
-  for (int r = 0; r < 3; ++r)
-    y[r] = s.rotation[r][0] * (s.scale * x[0]) + s.rotation[r][1] * (s.scale * x[1]) +
-           s.rotation[r][2] * (s.scale * x[2]) + s.translate[r];
-  return y;
 }
 
 class NurbsSurfaceFamily final : public FamilyOf<NurbsSurface> {
@@ -80,28 +71,51 @@ class NurbsSurfaceFamily final : public FamilyOf<NurbsSurface> {
       if (!p.weights.empty()) w.numbers("weights", p.weights);
     });
   }
-  Box3 bounding_box(const Shape&) const override { not_implemented(); }
+  // The body of the descriptor, once per process; a surface that does not close a volume
+  // (which the oracle refuses with its problem) has none: empty answers below.
+  Box3 bounding_box(const Shape& s) const override {
+    const auto body = surface::cached_body(of(s));
+    return body ? body->box : holding_box(s);
+  }
   // The box of the placed control points: with positive weights it holds the surface.
   Box3 holding_box(const Shape& s) const override {
     Box3 b{{INFINITY, INFINITY, INFINITY}, {-INFINITY, -INFINITY, -INFINITY}};
     for (const NurbsPatch& patch : of(s).patches)
       for (const Vec3& x : patch.control_points) {
-        const Vec3 p = placed(of(s), x);
+        const Vec3 p = surface::place(of(s), x);
         for (int d = 0; d < 3; ++d) b.min[d] = std::min(b.min[d], p[d]), b.max[d] = std::max(b.max[d], p[d]);
       }
     return b;
   }
-  double measure(const Shape&) const override { not_implemented(); }
-  double boundary_measure(const Shape&) const override { not_implemented(); }
-  std::vector<Vec3> boundary_samples(const Shape&, double) const override { not_implemented(); }
-  bool contains(const Shape&, const Vec3&) const override { not_implemented(); }
+  double measure(const Shape& s) const override {
+    const auto body = surface::cached_body(of(s));
+    return body ? surface::volume(*body) : 0.0;
+  }
+  double boundary_measure(const Shape& s) const override {
+    const auto body = surface::cached_body(of(s));
+    return body ? surface::area(*body) : 0.0;
+  }
+  std::vector<Vec3> boundary_samples(const Shape& s, double spacing) const override {
+    const auto body = surface::cached_body(of(s));
+    return body ? surface::surface_points(*body, spacing) : std::vector<Vec3>{};
+  }
+  bool contains(const Shape& s, const Vec3& p) const override {
+    const auto body = surface::cached_body(of(s));
+    return body && point_in_box<3>(p, body->box) && surface::side(*body, p) >= 0;
+  }
   void translate(Shape& s, const Vec3& o) const override {
     for (int k = 0; k < 3; ++k) of(s).translate[k] += o[k];
   }
-  bool judged_by_box() const override { return true; }
-  std::unique_ptr<SurfaceModel> surface_model(const Shape&, const std::string& source,
+  // Distances between two surfaces from their bodies' cells (levels refine like spheres'),
+  // not from their boxes.
+  std::optional<bool> overlap_same_family(const Shape& a, const Shape& b, double gap) const override {
+    const auto ba = surface::cached_body(of(a)), bb = surface::cached_body(of(b));
+    if (!ba || !bb) return std::nullopt;
+    return surface::within(*ba, *bb, gap);
+  }
+  std::unique_ptr<SurfaceModel> surface_model(const Shape& s, const std::string& source,
                                               const std::string& field) const override {
-    throw InputError(source, field + ".shape", "nurbs_surface: not supported yet");
+    return make_nurbs_surface_model(s, source, field);
   }
 };
 

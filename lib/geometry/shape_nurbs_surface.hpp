@@ -1,5 +1,5 @@
 #pragma once
-// NURBS surfaces: read and written by scene files, not meshed yet (the oracle refuses them).
+// NURBS surfaces (closed sets of rational B-spline patches) as 3D inclusions.
 #include "geometry/shape_family.hpp"
 
 namespace cisamr::geometry {

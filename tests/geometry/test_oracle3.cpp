@@ -339,7 +339,7 @@ TEST(Oracle3, ValidationOfAnalyticShapes) {
   Ellipsoid e{{0.5, 0.5, 0.5}, {0.1, 0.2, 0.3}};
   e.rotation[0][0] = 2;
   expect_input_error([&] { one({e, 2, 0}); }, "inclusions[0].rotation", {"orthonormal"});
-  expect_input_error([&] { one({NurbsSurface{}, 2, 0}); }, "inclusions[0].shape", {"not supported yet"});
+  expect_input_error([&] { one({NurbsSurface{}, 2, 0}); }, "inclusions[0].patches", {"at least one patch"});
   // Different phases overlapping: named; touching (to rounding) is accepted.
   SceneDesc s = base_scene();
   s.inclusions = {sphere(0.3, 0.5, 0.5, 0.1), sphere(0.45, 0.5, 0.5, 0.1, 3)};

@@ -1,0 +1,971 @@
+// Closed exact surfaces of rational Bézier pieces (contract in surface_body.hpp; design in
+// docs/nurbs-step-design.md §2).
+#include "geometry/surface_body.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <limits>
+#include <map>
+#include <mutex>
+#include <numeric>
+
+#include "core/vec_math.hpp"
+#include "geometry/nurbs_bezier.hpp"
+#include "geometry/shape_model.hpp"
+
+namespace cisamr::geometry::surface {
+namespace {
+
+constexpr double kUnit = std::numeric_limits<double>::epsilon() / 2;
+constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr std::size_t kMaxTriangles = std::size_t{1} << 20;
+// Shells at most about this thick (× size): thin enough that few queries need the exact
+// surface, coarse enough that a sphere takes about 1,500 triangles.
+constexpr double kThicknessTarget = 1e-3;
+
+const char* const kSideName[4] = {"v_min", "u_max", "v_max", "u_min"};
+
+// ---------------------------------------------------------------- sides
+
+// The boundary curve of a patch on one side, as its Bézier spans: side 0 is v = v_min
+// (along u), 1 u = u_max (along v), 2 v = v_max (along u), 3 u = u_min (along v).
+struct SideCurve {
+  int degree = 0;
+  std::vector<std::vector<double>> spans;  // homogeneous points of each span, in parameter order
+};
+
+SideCurve side_curve(const nurbs::PatchPieces& pp, int side) {
+  SideCurve c;
+  const bool along_u = side == 0 || side == 2;
+  const int spans = along_u ? pp.count_u : pp.count_v;
+  const nurbs::BezierPatch& first = pp.pieces[0];
+  c.degree = along_u ? first.degree_u : first.degree_v;
+  for (int k = 0; k < spans; ++k) {
+    const int a = along_u ? k : (side == 1 ? pp.count_u - 1 : 0);
+    const int b = along_u ? (side == 2 ? pp.count_v - 1 : 0) : k;
+    const nurbs::BezierPatch& piece = pp.pieces[static_cast<std::size_t>(a + pp.count_u * b)];
+    std::vector<double> h;
+    for (int m = 0; m <= c.degree; ++m) {
+      const int i = along_u ? m : (side == 1 ? piece.degree_u : 0);
+      const int j = along_u ? (side == 2 ? piece.degree_v : 0) : m;
+      h.insert(h.end(), piece.point(i, j), piece.point(i, j) + 4);
+    }
+    c.spans.push_back(std::move(h));
+  }
+  return c;
+}
+
+Vec3 cart(const double* h) { return {h[0] / h[3], h[1] / h[3], h[2] / h[3]}; }
+
+// Largest distance of the curve's control points from its first one.
+double pole_spread(const SideCurve& c) {
+  const Vec3 p0 = cart(c.spans[0].data());
+  double d = 0;
+  for (const auto& s : c.spans)
+    for (int m = 0; m <= c.degree; ++m) d = std::max(d, norm(sub(cart(s.data() + 4 * m), p0)));
+  return d;
+}
+
+// Largest control-point distance between two curves taken as the same rational Bézier
+// spans (reversed: b run backwards), or infinity when they cannot be (counts, degrees,
+// weights not proportional).
+double curve_gap(const SideCurve& a, const SideCurve& b, bool reversed) {
+  if (a.degree != b.degree || a.spans.size() != b.spans.size()) return kInf;
+  const std::size_t n = a.spans.size();
+  const int p = a.degree;
+  double gap = 0;
+  for (std::size_t k = 0; k < n; ++k) {
+    const std::vector<double>& sa = a.spans[k];
+    const std::vector<double>& sb = b.spans[reversed ? n - 1 - k : k];
+    for (int m = 0; m <= p; ++m) {
+      const double* ha = sa.data() + 4 * m;
+      const double* hb = sb.data() + 4 * (reversed ? p - m : m);
+      const double* ha0 = sa.data();
+      const double* hb0 = sb.data() + 4 * (reversed ? p : 0);
+      if (std::abs(ha[3] / ha0[3] - hb[3] / hb0[3]) > 1e-12 * (ha[3] / ha0[3])) return kInf;
+      gap = std::max(gap, norm(sub(cart(ha), cart(hb))));
+    }
+  }
+  return gap;
+}
+
+// ---------------------------------------------------------------- small helpers
+
+struct UnionFind {
+  std::vector<std::int32_t> parent;
+  explicit UnionFind(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
+  std::int32_t find(std::int32_t x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  }
+  void unite(std::int32_t a, std::int32_t b) {
+    a = find(a), b = find(b);
+    if (a != b) parent[std::max(a, b)] = std::min(a, b);  // the smaller id represents
+  }
+};
+
+void grow(Box3& b, const Vec3& p) {
+  for (int k = 0; k < 3; ++k) b.min[k] = std::min(b.min[k], p[k]), b.max[k] = std::max(b.max[k], p[k]);
+}
+
+Box3 empty_box() { return {{kInf, kInf, kInf}, {-kInf, -kInf, -kInf}}; }
+
+Vec3 unit(const Vec3& v) {
+  const double n = norm(v);
+  return n > 0 ? scale(v, 1 / n) : Vec3{0, 0, 0};
+}
+
+double max_abs(const Box3& b) {
+  double m = 0;
+  for (int k = 0; k < 3; ++k) m = std::max({m, std::abs(b.min[k]), std::abs(b.max[k])});
+  return m;
+}
+
+// Samples per Bézier span in one direction so that a cell deviates from its chords by
+// about target: the second differences of the control net bound the second derivative.
+int samples_per_span(const nurbs::BezierPatch& piece, bool along_u, double target) {
+  const int p = along_u ? piece.degree_u : piece.degree_v;
+  if (p < 2) return 1;
+  const int q = along_u ? piece.degree_v : piece.degree_u;
+  double second = 0;
+  for (int r = 0; r <= q; ++r)
+    for (int m = 1; m < p; ++m) {
+      auto at = [&](int k) { return along_u ? piece.cartesian(k, r) : piece.cartesian(r, k); };
+      second = std::max(second, norm(add(sub(at(m - 1), scale(at(m), 2)), at(m + 1))));
+    }
+  const double bound = p * (p - 1) * second;
+  return std::clamp(static_cast<int>(std::ceil(std::sqrt(bound / (8 * target)))), 1, 64);
+}
+
+// Face indices named in stl's problem text: "(face 12)" or "(faces 3 and 7)".
+std::vector<std::int64_t> faces_named(const std::string& problem) {
+  std::vector<std::int64_t> out;
+  for (const char* key : {"(face ", "(faces "}) {
+    std::size_t at = problem.find(key);
+    if (at == std::string::npos) continue;
+    at += std::strlen(key);
+    while (at < problem.size()) {
+      std::size_t end = at;
+      while (end < problem.size() && std::isdigit(static_cast<unsigned char>(problem[end]))) ++end;
+      if (end == at) break;
+      out.push_back(std::stoll(problem.substr(at, end - at)));
+      at = problem.find_first_of("0123456789)", end);
+      if (at == std::string::npos || problem[at] == ')') break;
+    }
+  }
+  return out;
+}
+
+std::string format_point(const Vec3& p) {
+  char buf[96];
+  std::snprintf(buf, sizeof buf, "(%.6g, %.6g, %.6g)", p[0], p[1], p[2]);
+  return buf;
+}
+
+// ∫∫ f(S, S_s, S_t) over the square [s0, s1] × [t0, t1] of a piece, tensor Gauss–Legendre.
+template <class F>
+double square_integral(const nurbs::BezierPatch& piece, double s0, double s1, double t0, double t1, F&& f) {
+  return (s1 - s0) * (t1 - t0) * nurbs::gauss16([&](double y) {
+           return nurbs::gauss16([&](double x) {
+             Vec3 ds, dt;
+             const Vec3 p = nurbs::evaluate(piece, s0 + x * (s1 - s0), t0 + y * (t1 - t0), &ds, &dt);
+             return f(p, ds, dt);
+           });
+         });
+}
+
+// The integral over the whole piece, on 2^k × 2^k squares until two refinements agree to
+// 1e-14 relative (rational integrands are smooth but not polynomial).
+template <class F>
+double piece_integral(const nurbs::BezierPatch& piece, F&& f) {
+  auto at_level = [&](int n) {
+    double sum = 0;
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i)
+        sum += square_integral(piece, double(i) / n, double(i + 1) / n, double(j) / n, double(j + 1) / n, f);
+    return sum;
+  };
+  double prev = at_level(1);
+  for (int n = 2; n <= 16; n *= 2) {
+    const double cur = at_level(n);
+    if (std::abs(cur - prev) <= 1e-14 * std::max(std::abs(cur), 1e-300)) return cur;
+    prev = cur;
+  }
+  return prev;
+}
+
+}  // namespace
+
+Vec3 place(const NurbsSurface& s, const Vec3& v) {
+  Vec3 w{};
+  for (int r = 0; r < 3; ++r)
+    w[r] = s.rotation[r][0] * (s.scale * v[0]) + s.rotation[r][1] * (s.scale * v[1]) +
+           s.rotation[r][2] * (s.scale * v[2]) + s.translate[r];
+  return w;
+}
+
+Stats& stats() {
+  thread_local Stats s;
+  return s;
+}
+
+// ---------------------------------------------------------------- build
+
+std::string build(const NurbsSurface& surface, Body& body) {
+  body = Body{};
+  if (!(surface.scale > 0) || !std::isfinite(surface.scale)) return ".scale: must be positive";
+  if (!orthonormal(surface.rotation)) return ".rotation: must be orthonormal";
+  for (int k = 0; k < 3; ++k)
+    if (!std::isfinite(surface.translate[k])) return ".translate: must be finite";
+  if (surface.patches.empty()) return ".patches: needs at least one patch";
+  const int np = static_cast<int>(surface.patches.size());
+  auto patch_field = [](int k) { return ".patches[" + std::to_string(k) + "]"; };
+
+  // Placed pieces.
+  body.patches.resize(static_cast<std::size_t>(np));
+  Box3 box = empty_box();
+  for (int k = 0; k < np; ++k) {
+    NurbsPatch placed = surface.patches[static_cast<std::size_t>(k)];
+    for (Vec3& v : placed.control_points) {
+      if (!std::isfinite(v[0]) || !std::isfinite(v[1]) || !std::isfinite(v[2]))
+        return patch_field(k) + ".control_points: must be finite";
+      v = place(surface, v);
+    }
+    const std::string problem = nurbs::extract_patch(placed, body.patches[static_cast<std::size_t>(k)]);
+    if (!problem.empty()) return patch_field(k) + problem;
+    for (const nurbs::BezierPatch& piece : body.patches[static_cast<std::size_t>(k)].pieces) {
+      const Box3 cb = nurbs::control_box(piece);
+      grow(box, cb.min), grow(box, cb.max);
+    }
+  }
+  body.box = box;
+  body.size = norm(sub(box.max, box.min));
+  if (!(body.size > 0)) return ".patches: all control points coincide";
+  body.tolerance = 1e-12 * body.size;
+  const double kappa = 1e-9 * body.size;  // sides closer than this are one curve
+
+  // Sides: poles, then every other side matched with exactly one other side.
+  std::vector<SideCurve> curves(static_cast<std::size_t>(4 * np));
+  std::vector<char> pole(curves.size(), 0);
+  for (int k = 0; k < np; ++k)
+    for (int s = 0; s < 4; ++s) {
+      curves[static_cast<std::size_t>(4 * k + s)] = side_curve(body.patches[static_cast<std::size_t>(k)], s);
+      pole[static_cast<std::size_t>(4 * k + s)] = pole_spread(curves[static_cast<std::size_t>(4 * k + s)]) <= kappa;
+    }
+  for (int k = 0; k < np; ++k) {
+    bool all_poles = true;
+    for (int s = 0; s < 4; ++s) all_poles = all_poles && pole[static_cast<std::size_t>(4 * k + s)];
+    if (all_poles) return patch_field(k) + ": all control points of its boundary coincide";
+  }
+  struct Match {
+    int other = -1;
+    bool reversed = false;
+    double gap = 0;
+  };
+  std::vector<Match> match(curves.size());
+  for (std::size_t a = 0; a < curves.size(); ++a) {
+    if (pole[a]) continue;
+    int count = 0;
+    std::string names;
+    double nearest = kInf;
+    for (std::size_t b = 0; b < curves.size(); ++b) {
+      if (b == a || pole[b]) continue;
+      for (bool rev : {false, true}) {
+        const double g = curve_gap(curves[a], curves[b], rev);
+        if (g <= kappa) {
+          if (count == 0 || match[a].other != static_cast<int>(b)) {
+            ++count;
+            names += std::string(names.empty() ? "" : ", ") + "patches[" + std::to_string(b / 4) + "]." +
+                     kSideName[b % 4];
+          }
+          match[a] = {static_cast<int>(b), rev, g};
+          break;
+        }
+        // How far the nearest candidate is: its end points.
+        const SideCurve &ca = curves[a], &cb = curves[b];
+        const Vec3 a0 = cart(ca.spans.front().data()), b0 = cart(cb.spans.front().data());
+        const Vec3 b1 = cart(cb.spans.back().data() + 4 * cb.degree);
+        nearest = std::min({nearest, norm(sub(a0, b0)), norm(sub(a0, b1))});
+      }
+    }
+    const std::string field = patch_field(static_cast<int>(a / 4)) + "." + kSideName[a % 4];
+    if (count == 0) {
+      char buf[64];
+      std::snprintf(buf, sizeof buf, "%.3g", nearest);
+      return field + ": meets no other patch boundary with the same control points within 1e-9 of the size " +
+             "(patches meet along shared boundary curves; nearest end point " + buf + " away, at " +
+             format_point(cart(curves[a].spans.front().data())) + ")";
+    }
+    if (count > 1) return field + ": meets " + std::to_string(count) + " boundaries (" + names + ")";
+  }
+
+  // Orientation: matched sides must be traversed oppositely in the patches' own
+  // counter-clockwise (u, v) order; flip patches to make them so.
+  const int ccw[4] = {1, 1, -1, -1};
+  std::vector<int> flip(static_cast<std::size_t>(np), -1);
+  for (int start = 0; start < np; ++start) {
+    if (flip[static_cast<std::size_t>(start)] >= 0) continue;
+    flip[static_cast<std::size_t>(start)] = 0;
+    std::vector<int> stack{start};
+    while (!stack.empty()) {
+      const int k = stack.back();
+      stack.pop_back();
+      for (int s = 0; s < 4; ++s) {
+        const Match& m = match[static_cast<std::size_t>(4 * k + s)];
+        if (m.other < 0) continue;
+        const int o = m.other / 4, os = m.other % 4;
+        const bool opposite = ccw[s] * ccw[os] * (m.reversed ? -1 : 1) < 0;
+        const int want = flip[static_cast<std::size_t>(k)] ^ (opposite ? 0 : 1);
+        if (flip[static_cast<std::size_t>(o)] < 0) {
+          flip[static_cast<std::size_t>(o)] = want;
+          stack.push_back(o);
+        } else if (flip[static_cast<std::size_t>(o)] != want) {
+          return ".patches: the patches cannot be oriented consistently (patches[" + std::to_string(k) + "]." +
+                 kSideName[s] + " meets patches[" + std::to_string(o) + "]." + kSideName[os] + ")";
+        }
+      }
+    }
+  }
+
+  // Samples per span: one count per class of directions linked through matched sides.
+  UnionFind dirs(static_cast<std::size_t>(2 * np));
+  for (std::size_t a = 0; a < curves.size(); ++a)
+    if (match[a].other >= 0) {
+      const int da = (a % 4 == 0 || a % 4 == 2) ? 0 : 1;
+      const int b = match[a].other;
+      const int db = (b % 4 == 0 || b % 4 == 2) ? 0 : 1;
+      dirs.unite(static_cast<std::int32_t>(2 * (a / 4) + da), static_cast<std::int32_t>(2 * (b / 4) + db));
+    }
+  std::vector<int> n_class(static_cast<std::size_t>(2 * np), 1);
+  for (int k = 0; k < np; ++k)
+    for (const nurbs::BezierPatch& piece : body.patches[static_cast<std::size_t>(k)].pieces)
+      for (int d = 0; d < 2; ++d) {
+        const std::int32_t c = dirs.find(2 * k + d);
+        n_class[static_cast<std::size_t>(c)] =
+            std::max(n_class[static_cast<std::size_t>(c)], samples_per_span(piece, d == 0, kThicknessTarget * body.size));
+      }
+
+  // Grids: patch k has (Nu + 1) × (Nv + 1) points from base[k].
+  std::vector<int> nu(np), nv(np), per_u(np), per_v(np);
+  std::vector<std::int64_t> base(static_cast<std::size_t>(np) + 1, 0);
+  for (int k = 0; k < np; ++k) {
+    const nurbs::PatchPieces& pp = body.patches[static_cast<std::size_t>(k)];
+    per_u[k] = n_class[static_cast<std::size_t>(dirs.find(2 * k))];
+    per_v[k] = n_class[static_cast<std::size_t>(dirs.find(2 * k + 1))];
+    nu[k] = pp.count_u * per_u[k];
+    nv[k] = pp.count_v * per_v[k];
+    base[k + 1] = base[k] + std::int64_t{nu[k] + 1} * (nv[k] + 1);
+    if (2 * std::size_t(nu[k]) * nv[k] > kMaxTriangles)
+      return patch_field(k) + ": needs more than " + std::to_string(kMaxTriangles) + " triangles";
+  }
+  if (base[np] > std::int64_t{1} << 30) return ".patches: too many tessellation points";
+  auto grid_id = [&](int k, int i, int j) { return static_cast<std::int32_t>(base[k] + i + std::int64_t{nu[k] + 1} * j); };
+  // Local (piece, s, t) of grid point (i, j).
+  auto locate = [&](int k, int i, int j, int& piece, double& s, double& t) {
+    const nurbs::PatchPieces& pp = body.patches[static_cast<std::size_t>(k)];
+    const int a = std::min(i / per_u[k], pp.count_u - 1), b = std::min(j / per_v[k], pp.count_v - 1);
+    piece = a + pp.count_u * b;
+    s = double(i - a * per_u[k]) / per_u[k];
+    t = double(j - b * per_v[k]) / per_v[k];
+  };
+  auto side_point = [&](int k, int s, int m) {
+    switch (s) {
+      case 0: return grid_id(k, m, 0);
+      case 1: return grid_id(k, nu[k], m);
+      case 2: return grid_id(k, m, nv[k]);
+      default: return grid_id(k, 0, m);
+    }
+  };
+  auto side_length = [&](int k, int s) { return (s == 0 || s == 2) ? nu[k] : nv[k]; };
+
+  const std::size_t npoints = static_cast<std::size_t>(base[np]);
+  std::vector<Vec3> surface_at(npoints);
+  for (int k = 0; k < np; ++k) {
+    const nurbs::PatchPieces& pp = body.patches[static_cast<std::size_t>(k)];
+    for (int j = 0; j <= nv[k]; ++j)
+      for (int i = 0; i <= nu[k]; ++i) {
+        int piece;
+        double s, t;
+        locate(k, i, j, piece, s, t);
+        surface_at[static_cast<std::size_t>(grid_id(k, i, j))] = nurbs::evaluate(pp.pieces[static_cast<std::size_t>(piece)], s, t);
+      }
+  }
+  // Weld: matched sides point to point, poles to one point.
+  UnionFind weld(npoints);
+  std::vector<Vec3> position = surface_at;
+  for (int k = 0; k < np; ++k)
+    for (int s = 0; s < 4; ++s) {
+      const std::size_t a = static_cast<std::size_t>(4 * k + s);
+      const int len = side_length(k, s);
+      if (pole[a]) {
+        const Vec3 p0 = cart(curves[a].spans[0].data());
+        for (int m = 0; m <= len; ++m) {
+          weld.unite(side_point(k, s, 0), side_point(k, s, m));
+          position[static_cast<std::size_t>(side_point(k, s, m))] = p0;
+        }
+        continue;
+      }
+      const Match& mt = match[a];
+      const int o = mt.other / 4, os = mt.other % 4;
+      if (side_length(o, os) != len) return ".patches: internal error (side sample counts differ)";
+      for (int m = 0; m <= len; ++m) weld.unite(side_point(k, s, m), side_point(o, os, mt.reversed ? len - m : m));
+    }
+  std::vector<std::int32_t> vertex_of(npoints, -1);
+  std::vector<Vec3> vertices;
+  for (std::size_t g = 0; g < npoints; ++g) {
+    const std::int32_t r = weld.find(static_cast<std::int32_t>(g));
+    if (vertex_of[static_cast<std::size_t>(r)] < 0) {
+      vertex_of[static_cast<std::size_t>(r)] = static_cast<std::int32_t>(vertices.size());
+      vertices.push_back(position[static_cast<std::size_t>(r)]);
+    }
+    vertex_of[g] = vertex_of[static_cast<std::size_t>(r)];
+  }
+  // How far each grid point's own surface point lies from its welded vertex.
+  std::vector<double> gap(npoints);
+  for (std::size_t g = 0; g < npoints; ++g)
+    gap[g] = norm(sub(surface_at[g], vertices[static_cast<std::size_t>(vertex_of[g])]));
+
+  // Cells and triangles.
+  std::vector<std::array<std::int32_t, 3>> faces;
+  std::vector<std::int32_t> face_cell;
+  for (int k = 0; k < np; ++k) {
+    const nurbs::PatchPieces& pp = body.patches[static_cast<std::size_t>(k)];
+    const bool flipped = flip[static_cast<std::size_t>(k)] == 1;
+    for (int j = 0; j < nv[k]; ++j)
+      for (int i = 0; i < nu[k]; ++i) {
+        Cell c;
+        c.patch = k;
+        double s0, t0;
+        locate(k, i, j, c.piece, s0, t0);
+        c.s0 = s0, c.t0 = t0;
+        c.s1 = double(i + 1 - (c.piece % pp.count_u) * per_u[k]) / per_u[k];
+        c.t1 = double(j + 1 - (c.piece / pp.count_u) * per_v[k]) / per_v[k];
+        c.outward = flipped ? -1 : 1;
+        const std::int32_t g[4] = {grid_id(k, i, j), grid_id(k, i + 1, j), grid_id(k, i + 1, j + 1), grid_id(k, i, j + 1)};
+        std::int32_t v[4];
+        double widen = 0;
+        for (int q = 0; q < 4; ++q) {
+          v[q] = vertex_of[static_cast<std::size_t>(g[q])];
+          widen = std::max(widen, gap[static_cast<std::size_t>(g[q])]);
+        }
+        const nurbs::BezierPatch sub_piece =
+            nurbs::restrict_patch(pp.pieces[static_cast<std::size_t>(c.piece)], c.s0, c.s1, c.t0, c.t1);
+        const Vec3 &p0 = vertices[static_cast<std::size_t>(v[0])], &p1 = vertices[static_cast<std::size_t>(v[1])],
+                   &p2 = vertices[static_cast<std::size_t>(v[2])], &p3 = vertices[static_cast<std::size_t>(v[3])];
+        c.normal = unit(cross(sub(p2, p0), sub(p3, p1)));
+        if (c.normal == Vec3{0, 0, 0}) {
+          Vec3 ds, dt;
+          nurbs::evaluate(sub_piece, 0.5, 0.5, &ds, &dt);
+          c.normal = unit(cross(ds, dt));
+          if (c.normal == Vec3{0, 0, 0}) c.normal = {1, 0, 0};
+        }
+        c.box = nurbs::control_box(sub_piece);
+        const std::array<double, 2> slab = nurbs::slab(sub_piece, c.normal);
+        c.lo = slab[0], c.hi = slab[1];
+        for (const Vec3* p : {&p0, &p1, &p2, &p3}) {
+          grow(c.box, *p);
+          c.lo = std::min(c.lo, dot(c.normal, *p)), c.hi = std::max(c.hi, dot(c.normal, *p));
+        }
+        const double w = widen + 8 * kUnit * max_abs(c.box) + body.tolerance;
+        for (int d = 0; d < 3; ++d) c.box.min[d] -= w, c.box.max[d] += w;
+        c.lo -= w, c.hi += w;
+        body.max_thickness = std::max(body.max_thickness, c.hi - c.lo);
+        const auto cell_id = static_cast<std::int32_t>(body.cells.size());
+        body.cells.push_back(c);
+        // Triangles: the quad split along its shorter diagonal; corners welded into one
+        // (a pole) leave one triangle or none.
+        auto emit = [&](std::int32_t a, std::int32_t b, std::int32_t d) {
+          if (a == b || b == d || a == d) return;
+          faces.push_back(flipped ? std::array<std::int32_t, 3>{a, d, b} : std::array<std::int32_t, 3>{a, b, d});
+          face_cell.push_back(cell_id);
+        };
+        const double d02 = norm(sub(p2, p0)), d13 = norm(sub(p3, p1));
+        if (v[0] == v[1] || v[2] == v[3] || v[1] == v[2] || v[3] == v[0]) {
+          emit(v[0], v[1], v[2]);
+          emit(v[0], v[2], v[3]);
+        } else if (d02 <= d13) {
+          emit(v[0], v[1], v[2]);
+          emit(v[0], v[2], v[3]);
+        } else {
+          emit(v[0], v[1], v[3]);
+          emit(v[1], v[2], v[3]);
+        }
+      }
+  }
+  if (faces.size() > kMaxTriangles) return ".patches: needs more than " + std::to_string(kMaxTriangles) + " triangles";
+
+  // The whole surface may face either way: make the tessellation (and every cell's
+  // outward sign) face out.
+  double six_volume = 0;
+  for (const auto& f : faces) {
+    const Vec3 &a = vertices[static_cast<std::size_t>(f[0])], &b = vertices[static_cast<std::size_t>(f[1])],
+               &c = vertices[static_cast<std::size_t>(f[2])];
+    six_volume += dot(a, cross(b, c));
+  }
+  if (six_volume < 0) {
+    for (auto& f : faces) std::swap(f[1], f[2]);
+    for (Cell& c : body.cells) c.outward = static_cast<std::int8_t>(-c.outward);
+  }
+
+  const std::string problem = stl::build_indexed(vertices, faces, body.mesh, true);
+  if (!problem.empty()) {
+    const std::vector<std::int64_t> named = faces_named(problem);
+    auto patch_of = [&](std::int64_t f) { return body.cells[static_cast<std::size_t>(face_cell[static_cast<std::size_t>(f)])].patch; };
+    if (problem.rfind("self-intersecting", 0) == 0 && named.size() == 2) {
+      const auto& f = faces[static_cast<std::size_t>(named[0])];
+      const int pa = patch_of(named[0]), pb = patch_of(named[1]);
+      const std::string where = format_point(vertices[static_cast<std::size_t>(f[0])]);
+      if (pa == pb) return patch_field(pa) + ": intersects itself (tessellation, near " + where + ")";
+      return ".patches: patches[" + std::to_string(std::min(pa, pb)) + "] and patches[" +
+             std::to_string(std::max(pa, pb)) + "] intersect (tessellation, near " + where + ")";
+    }
+    if (!named.empty()) return patch_field(patch_of(named[0])) + ": tessellation: " + problem;
+    return ".patches: tessellation: " + problem;
+  }
+  std::vector<Box3> boxes(body.cells.size());
+  for (std::size_t c = 0; c < boxes.size(); ++c) boxes[c] = body.cells[c].box;
+  body.cell_bvh.build(boxes);
+  for (const Box3& b : boxes) grow(body.box, b.min), grow(body.box, b.max);
+  return "";
+}
+
+std::shared_ptr<const Body> cached_body(const NurbsSurface& surface, std::string* problem) {
+  // FNV-1a over every number of the descriptor.
+  std::uint64_t h = 1469598103934665603ull;
+  auto mix = [&](const void* data, std::size_t n) {
+    const auto* b = static_cast<const unsigned char*>(data);
+    for (std::size_t i = 0; i < n; ++i) h = (h ^ b[i]) * 1099511628211ull;
+  };
+  for (const NurbsPatch& p : surface.patches) {
+    mix(p.degree.data(), sizeof p.degree);
+    for (const auto* v : {&p.knots_u, &p.knots_v, &p.weights}) {
+      const std::size_t n = v->size();
+      mix(&n, sizeof n);
+      mix(v->data(), n * sizeof(double));
+    }
+    const std::size_t n = p.control_points.size();
+    mix(&n, sizeof n);
+    mix(p.control_points.data(), n * sizeof(Vec3));
+  }
+  mix(&surface.scale, sizeof surface.scale);
+  mix(&surface.rotation, sizeof surface.rotation);
+  mix(&surface.translate, sizeof surface.translate);
+
+  static std::mutex mutex;
+  static std::map<std::uint64_t, std::pair<std::shared_ptr<const Body>, std::string>> cache;
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    const auto it = cache.find(h);
+    if (it != cache.end()) {
+      if (problem) *problem = it->second.second;
+      return it->second.first;
+    }
+  }
+  auto body = std::make_shared<Body>();
+  std::shared_ptr<const Body> result;
+  const std::string why = build(surface, *body);
+  if (why.empty()) result = std::move(body);
+  if (problem) *problem = why;
+  std::lock_guard<std::mutex> lock(mutex);
+  if (cache.size() >= 256) cache.clear();
+  cache.emplace(h, std::make_pair(result, why));
+  return result;
+}
+
+// ---------------------------------------------------------------- queries
+
+namespace {
+
+struct Root {
+  double lambda;
+  std::int32_t cell;
+  double s, t;  // local to the cell's restricted piece
+};
+
+nurbs::BezierPatch cell_piece(const Body& body, const Cell& c) {
+  return nurbs::restrict_patch(body.patches[static_cast<std::size_t>(c.patch)].pieces[static_cast<std::size_t>(c.piece)],
+                               c.s0, c.s1, c.t0, c.t1);
+}
+
+bool in_shell(const Cell& c, const Vec3& p) {
+  for (int k = 0; k < 3; ++k)
+    if (!(p[k] >= c.box.min[k] && p[k] <= c.box.max[k])) return false;
+  const double x = dot(c.normal, p);
+  return x >= c.lo && x <= c.hi;
+}
+
+bool in_box(const Box3& b, const Vec3& p) {
+  for (int k = 0; k < 3; ++k)
+    if (!(p[k] >= b.min[k] && p[k] <= b.max[k])) return false;
+  return true;
+}
+
+bool in_any_shell(const Body& body, const Vec3& p) {
+  bool found = false;
+  body.cell_bvh.traverse([&](const Box3& b) { return in_box(b, p); },
+                         [&](std::int32_t c) { return found = in_shell(body.cells[static_cast<std::size_t>(c)], p); });
+  return found;
+}
+
+// Does the segment a + λ(b − a), λ ∈ [l0, l1], meet the box (slab method)?
+bool segment_meets_box(const Vec3& a, const Vec3& d, double l0, double l1, const Box3& b) {
+  for (int k = 0; k < 3; ++k) {
+    if (d[k] == 0) {
+      if (a[k] < b.min[k] || a[k] > b.max[k]) return false;
+      continue;
+    }
+    double e0 = (b.min[k] - a[k]) / d[k], e1 = (b.max[k] - a[k]) / d[k];
+    if (e0 > e1) std::swap(e0, e1);
+    // Rounding of the divisions: a hair of slack keeps the test conservative.
+    e0 -= 1e-12 * (std::abs(e0) + 1), e1 += 1e-12 * (std::abs(e1) + 1);
+    l0 = std::max(l0, e0), l1 = std::min(l1, e1);
+    if (l0 > l1) return false;
+  }
+  return true;
+}
+
+// Roots of the line a + λ(b − a) with λ in [l0, l1] on the surface, ascending in λ, those
+// closer than τ merged (one root seen from two neighbouring cells).
+void line_roots(const Body& body, const Vec3& a, const Vec3& b, double l0, double l1, std::vector<Root>& out) {
+  out.clear();
+  const Vec3 d = sub(b, a);
+  const double len = norm(d);
+  if (!(len > 0)) return;
+  Box3 seg{a, a};
+  grow(seg, add(a, scale(d, l0)));
+  grow(seg, add(a, scale(d, l1)));
+  thread_local std::vector<nurbs::LineRoot> found;
+  nurbs::LineQuery query{a, b, l0, l1, body.size, body.tolerance};
+  body.cell_bvh.traverse([&](const Box3& nb) { return boxes_overlap(nb, seg) && segment_meets_box(a, d, l0, l1, nb); },
+                         [&](std::int32_t ci) {
+                           const Cell& c = body.cells[static_cast<std::size_t>(ci)];
+                           if (!segment_meets_box(a, d, l0, l1, c.box)) return false;
+                           const double x0 = dot(c.normal, a), dx = dot(c.normal, d);
+                           const double y0 = x0 + l0 * dx, y1 = x0 + l1 * dx;
+                           if ((y0 < c.lo && y1 < c.lo) || (y0 > c.hi && y1 > c.hi)) return false;
+                           found.clear();
+                           nurbs::line_roots(cell_piece(body, c), query, found);
+                           for (const nurbs::LineRoot& r : found) out.push_back({r.lambda, ci, r.s, r.t});
+                           return false;
+                         });
+  std::sort(out.begin(), out.end(), [](const Root& x, const Root& y) {
+    return x.lambda != y.lambda ? x.lambda < y.lambda : x.cell < y.cell;
+  });
+  std::size_t w = 0;
+  for (std::size_t i = 0; i < out.size(); ++i)
+    if (w == 0 || (out[i].lambda - out[w - 1].lambda) * len > body.tolerance) out[w++] = out[i];
+  out.resize(w);
+  stats().roots += static_cast<std::int64_t>(w);
+}
+
+// The outward normal (not unit) of the surface at a root.
+Vec3 normal_at(const Body& body, const Root& r) {
+  const Cell& c = body.cells[static_cast<std::size_t>(r.cell)];
+  Vec3 ds, dt;
+  nurbs::evaluate(cell_piece(body, c), r.s, r.t, &ds, &dt);
+  return scale(cross(ds, dt), c.outward);
+}
+
+// Inside/outside of p from the first root on the segment p → p + L·d (d unit): ON when
+// it lies within τ, else the normal there says whether the segment leaves or enters.
+// 2 when the first root is too grazing to tell; 3 when there is no root (the answer is q's).
+int side_along(const Body& body, const Vec3& p, const Vec3& d, double L, std::vector<Root>& roots) {
+  const Vec3 q = add(p, scale(d, L));
+  line_roots(body, p, q, -body.tolerance / L, 1, roots);
+  if (roots.empty()) return 3;
+  const Root& r = roots.front();
+  if (std::abs(r.lambda) * L <= body.tolerance) return 0;
+  const Vec3 n = normal_at(body, r);
+  const double nn = norm(n);
+  if (!(nn > 0)) return 2;
+  const double c = dot(n, d) / nn;
+  if (std::abs(c) < 1e-3) return 2;
+  return c > 0 ? 1 : -1;
+}
+
+}  // namespace
+
+int side(const Body& body, const Vec3& p) {
+  Stats& st = stats();
+  ++st.side_calls;
+  std::int32_t first = -1;
+  double thick = 0;
+  body.cell_bvh.traverse([&](const Box3& b) { return in_box(b, p); },
+                         [&](std::int32_t ci) {
+                           const Cell& c = body.cells[static_cast<std::size_t>(ci)];
+                           if (in_shell(c, p)) {
+                             if (first < 0 || ci < first) first = ci;
+                             thick = std::max(thick, c.hi - c.lo);
+                           }
+                           return false;
+                         });
+  if (first < 0) {
+    const int s = stl::side(body.mesh, p);
+    if (s != 0) return s;
+  }
+  ++st.side_in_shell;
+  thread_local std::vector<Root> roots;
+  const Vec3 n = first >= 0 ? body.cells[static_cast<std::size_t>(first)].normal : Vec3{1, 0, 0};
+  const Vec3 dirs[8] = {n, scale(n, -1), {1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+  const double start = 2 * thick + 8 * body.tolerance;
+  for (const Vec3& d : dirs) {
+    double L = start;
+    bool escaped = false;
+    for (int tries = 0; tries < 5 && !escaped; ++tries, L *= 4) {
+      const Vec3 q = add(p, scale(d, L));
+      if (!in_any_shell(body, q)) {
+        escaped = true;
+        break;
+      }
+    }
+    if (!escaped) continue;
+    const int s = side_along(body, p, d, L, roots);
+    if (s == 3) {
+      const int sq = stl::side(body.mesh, add(p, scale(d, L)));
+      if (sq != 0) return sq;
+      continue;
+    }
+    if (s != 2) return s;
+  }
+  // No short escape: rays to beyond the body's box, the first transversal one decides.
+  ++st.side_fallback;
+  const double far = 2 * body.size + norm(sub(p, body.box.min)) + norm(sub(p, body.box.max));
+  for (const Vec3& d : dirs) {
+    const int s = side_along(body, p, d, far, roots);
+    if (s == 3) return -1;
+    if (s != 2) return s;
+  }
+  const int s = stl::side(body.mesh, p);
+  return s;
+}
+
+void segment_roots(const Body& body, const Vec3& a, const Vec3& b, std::vector<double>& ts) {
+  thread_local std::vector<Root> roots;
+  ++stats().segment_calls;
+  line_roots(body, a, b, 0, 1, roots);
+  for (const Root& r : roots)
+    if (r.lambda > 0 && r.lambda < 1) ts.push_back(r.lambda);
+}
+
+namespace {
+
+bool piece_touches(const nurbs::BezierPatch& piece, const Box3& box, double tol, int depth) {
+  const Box3 cb = nurbs::control_box(piece);
+  if (!boxes_overlap(cb, box)) return false;
+  const int p = piece.degree_u, q = piece.degree_v;
+  for (const Vec3& corner : {piece.cartesian(0, 0), piece.cartesian(p, 0), piece.cartesian(0, q), piece.cartesian(p, q)})
+    if (in_box(box, corner)) return true;
+  if (norm(sub(cb.max, cb.min)) <= tol || depth >= 40) return true;
+  ++stats().touch_refinements;
+  nurbs::BezierPatch lo, hi;
+  const double su = norm(sub(piece.cartesian(p, 0), piece.cartesian(0, 0))) + norm(sub(piece.cartesian(p, q), piece.cartesian(0, q)));
+  const double sv = norm(sub(piece.cartesian(0, q), piece.cartesian(0, 0))) + norm(sub(piece.cartesian(p, q), piece.cartesian(p, 0)));
+  if (su >= sv)
+    nurbs::halve_u(piece, lo, hi);
+  else
+    nurbs::halve_v(piece, lo, hi);
+  return piece_touches(lo, box, tol, depth + 1) || piece_touches(hi, box, tol, depth + 1);
+}
+
+}  // namespace
+
+bool touches_box(const Body& body, const Box3& box) {
+  bool touches = false;
+  body.cell_bvh.traverse([&](const Box3& b) { return boxes_overlap(b, box); },
+                         [&](std::int32_t ci) {
+                           const Cell& c = body.cells[static_cast<std::size_t>(ci)];
+                           if (!boxes_overlap(c.box, box)) return false;
+                           double lo = 0, hi = 0;
+                           for (int k = 0; k < 3; ++k) {
+                             const double x0 = c.normal[k] * box.min[k], x1 = c.normal[k] * box.max[k];
+                             lo += std::min(x0, x1), hi += std::max(x0, x1);
+                           }
+                           if (hi < c.lo || lo > c.hi) return false;
+                           return touches = piece_touches(cell_piece(body, c), box, body.tolerance, 0);
+                         });
+  return touches;
+}
+
+namespace {
+
+double box_distance_boxes(const Box3& a, const Box3& b) {
+  double d2 = 0;
+  for (int k = 0; k < 3; ++k) {
+    const double e = std::max({a.min[k] - b.max[k], 0.0, b.min[k] - a.max[k]});
+    d2 += e * e;
+  }
+  return std::sqrt(d2);
+}
+
+double box_distance(const Box3& b, const Vec3& p) {
+  double d2 = 0;
+  for (int k = 0; k < 3; ++k) {
+    const double e = std::max({b.min[k] - p[k], 0.0, p[k] - b.max[k]});
+    d2 += e * e;
+  }
+  return std::sqrt(d2);
+}
+
+// The point of the piece nearest to p, by Gauss–Newton from the best of a 5 × 5 sample,
+// kept in [0, 1]².
+double nearest_on_piece(const nurbs::BezierPatch& piece, const Vec3& p, double& s, double& t) {
+  s = t = 0.5;
+  double best = kInf;
+  for (int j = 0; j <= 4; ++j)
+    for (int i = 0; i <= 4; ++i) {
+      const double d = norm(sub(nurbs::evaluate(piece, i / 4.0, j / 4.0), p));
+      if (d < best) best = d, s = i / 4.0, t = j / 4.0;
+    }
+  for (int it = 0; it < 64; ++it) {
+    Vec3 ds, dt;
+    const Vec3 x = nurbs::evaluate(piece, s, t, &ds, &dt);
+    const Vec3 r = sub(x, p);
+    const double a11 = dot(ds, ds), a12 = dot(ds, dt), a22 = dot(dt, dt);
+    const double b1 = -dot(ds, r), b2 = -dot(dt, r);
+    const double det = a11 * a22 - a12 * a12;
+    double hs, ht;
+    if (std::abs(det) > 1e-30 * (a11 * a22 + 1e-300)) {
+      hs = (b1 * a22 - b2 * a12) / det, ht = (a11 * b2 - a12 * b1) / det;
+    } else {
+      hs = a11 > 0 ? b1 / a11 : 0, ht = a22 > 0 ? b2 / a22 : 0;
+    }
+    // Damped: halve the step until the distance drops (far from the surface the
+    // Gauss–Newton step overshoots).
+    bool improved = false;
+    for (double lam = 1; lam > 1e-9 && !improved; lam *= 0.5) {
+      const double ns = std::clamp(s + lam * hs, 0.0, 1.0), nt = std::clamp(t + lam * ht, 0.0, 1.0);
+      const double d = norm(sub(nurbs::evaluate(piece, ns, nt), p));
+      if (d < best) {
+        improved = true;
+        const double moved = std::abs(ns - s) + std::abs(nt - t);
+        best = d, s = ns, t = nt;
+        if (moved < 1e-15) return best;
+      }
+    }
+    if (!improved) break;
+  }
+  return best;
+}
+
+}  // namespace
+
+double distance(const Body& body, const Vec3& p, Vec3* normal) {
+  double best = kInf;
+  std::int32_t best_cell = -1;
+  double bs = 0, bt = 0;
+  // Cells in order of their box distance, within the distance of the nearest vertex.
+  thread_local std::vector<std::pair<double, std::int32_t>> order;
+  order.clear();
+  double bound = kInf;
+  for (const Vec3& v : body.mesh.vertices) bound = std::min(bound, norm(sub(v, p)));
+  body.cell_bvh.traverse([&](const Box3& b) { return box_distance(b, p) <= bound; },
+                         [&](std::int32_t ci) {
+                           const double d = box_distance(body.cells[static_cast<std::size_t>(ci)].box, p);
+                           if (d <= bound) order.push_back({d, ci});
+                           return false;
+                         });
+  std::sort(order.begin(), order.end());
+  for (const auto& [lower, ci] : order) {
+    if (lower > best) break;
+    double s, t;
+    const double d = nearest_on_piece(cell_piece(body, body.cells[static_cast<std::size_t>(ci)]), p, s, t);
+    if (d < best) best = d, best_cell = ci, bs = s, bt = t;
+  }
+  if (normal) {
+    *normal = {0, 0, 0};
+    if (best_cell >= 0) *normal = normal_at(body, {0, best_cell, bs, bt});
+  }
+  return best;
+}
+
+namespace {
+
+// Do two pieces come within gap? Control boxes farther apart than gap: no; two corner
+// points (surface points) within gap: yes; else the larger piece is halved (conservative
+// past the depth limit).
+bool pieces_within(const nurbs::BezierPatch& a, const nurbs::BezierPatch& b, double gap, int depth) {
+  const Box3 ba = nurbs::control_box(a), bb = nurbs::control_box(b);
+  if (box_distance_boxes(ba, bb) > gap) return false;
+  const auto corners = [](const nurbs::BezierPatch& q) {
+    const int p = q.degree_u, r = q.degree_v;
+    return std::array<Vec3, 4>{q.cartesian(0, 0), q.cartesian(p, 0), q.cartesian(0, r), q.cartesian(p, r)};
+  };
+  const std::array<Vec3, 4> ca = corners(a), cb = corners(b);
+  for (const Vec3& x : ca)
+    for (const Vec3& y : cb)
+      if (norm(sub(x, y)) <= gap) return true;
+  if (depth >= 12) return true;
+  const double da = norm(sub(ba.max, ba.min)), db = norm(sub(bb.max, bb.min));
+  const nurbs::BezierPatch& big = da >= db ? a : b;
+  const nurbs::BezierPatch& other = da >= db ? b : a;
+  nurbs::BezierPatch lo, hi;
+  const std::array<Vec3, 4> c = da >= db ? ca : cb;
+  if (norm(sub(c[1], c[0])) + norm(sub(c[3], c[2])) >= norm(sub(c[2], c[0])) + norm(sub(c[3], c[1])))
+    nurbs::halve_u(big, lo, hi);
+  else
+    nurbs::halve_v(big, lo, hi);
+  return pieces_within(lo, other, gap, depth + 1) || pieces_within(hi, other, gap, depth + 1);
+}
+
+}  // namespace
+
+bool within(const Body& a, const Body& b, double gap) {
+  if (box_distance_boxes(a.box, b.box) > gap) return false;
+  // One inside the other (a tessellation vertex is a surface point).
+  if (side(b, a.mesh.vertices.front()) >= 0 || side(a, b.mesh.vertices.front()) >= 0) return true;
+  for (const Cell& ca : a.cells) {
+    if (box_distance_boxes(ca.box, b.box) > gap) continue;
+    bool close = false;
+    b.cell_bvh.traverse([&](const Box3& nb) { return box_distance_boxes(nb, ca.box) <= gap; },
+                        [&](std::int32_t ci) {
+                          const Cell& cb = b.cells[static_cast<std::size_t>(ci)];
+                          if (box_distance_boxes(cb.box, ca.box) > gap) return false;
+                          return close = pieces_within(cell_piece(a, ca), cell_piece(b, cb), gap, 0);
+                        });
+    if (close) return true;
+  }
+  return false;
+}
+
+double volume(const Body& body) {
+  double v = 0;
+  for (std::size_t k = 0; k < body.patches.size(); ++k) {
+    // A patch's orientation: that of any of its cells.
+    int outward = 1;
+    for (const Cell& c : body.cells)
+      if (c.patch == static_cast<std::int32_t>(k)) {
+        outward = c.outward;
+        break;
+      }
+    for (const nurbs::BezierPatch& piece : body.patches[k].pieces)
+      v += outward * piece_integral(piece, [](const Vec3& x, const Vec3& ds, const Vec3& dt) {
+             return dot(x, cross(ds, dt)) / 3;
+           });
+  }
+  return v;
+}
+
+double area(const Body& body) {
+  double a = 0;
+  for (const nurbs::PatchPieces& pp : body.patches)
+    for (const nurbs::BezierPatch& piece : pp.pieces)
+      a += piece_integral(piece, [](const Vec3&, const Vec3& ds, const Vec3& dt) { return norm(cross(ds, dt)); });
+  return a;
+}
+
+std::vector<Vec3> surface_points(const Body& body, double spacing) {
+  std::vector<Vec3> out = body.mesh.vertices;
+  for (const Cell& c : body.cells) {
+    const double diag = norm(sub(c.box.max, c.box.min));
+    const int n = std::clamp(static_cast<int>(std::ceil(diag / std::max(spacing, 1e-300))), 1, 64);
+    const nurbs::BezierPatch piece = cell_piece(body, c);
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) out.push_back(nurbs::evaluate(piece, (i + 0.5) / n, (j + 0.5) / n));
+  }
+  return out;
+}
+
+}  // namespace cisamr::geometry::surface

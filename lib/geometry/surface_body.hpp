@@ -1,0 +1,85 @@
+#pragma once
+// A closed exact surface made of rational Bézier pieces (private to lib/geometry;
+// docs/nurbs-step-design.md §2): the NURBS patches of a `nurbs_surface` inclusion, placed,
+// with a watertight tessellation whose cells each carry a certified shell (an axis box
+// and a slab that provably hold both the cell's triangles and the surface piece they
+// stand for). Outside every shell the tessellation's exact ray parity decides inside and
+// outside; inside a shell the exact surface does, through the roots of short segments.
+// Every answer is a pure function of the descriptor and the query (no state, no threads),
+// so meshes stay the same on any number of partitions.
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/types.hpp"
+#include "geometry/flat_bvh.hpp"
+#include "geometry/nurbs3.hpp"
+#include "geometry/scene.hpp"
+#include "geometry/stl_mesh.hpp"
+
+namespace cisamr::geometry::surface {
+
+// One grid cell of a piece: the parameter rectangle [s0, s1] × [t0, t1] (local to the
+// piece) that one or two tessellation triangles stand for, and its shell.
+struct Cell {
+  std::int32_t patch = 0, piece = 0;  // piece index within the patch's pieces
+  double s0 = 0, s1 = 1, t0 = 0, t1 = 1;
+  Box3 box{};          // holds the restricted piece and the cell's triangles
+  Vec3 normal{};       // unit; the slab is lo <= normal·x <= hi
+  double lo = 0, hi = 0;
+  std::int8_t outward = 1;  // outward normal = outward · (S_s × S_t)
+};
+
+struct Body {
+  std::vector<nurbs::PatchPieces> patches;  // placed control points
+  std::vector<Cell> cells;
+  FlatBvh<3> cell_bvh;  // over the cells' boxes
+  stl::Mesh mesh;       // the tessellation (outward faces)
+  Box3 box{};           // holds the surface
+  double size = 0;      // box diagonal
+  double tolerance = 0; // τ = 1e-12·size, the ON band
+  double max_thickness = 0;  // thickest shell (hi − lo)
+};
+
+// Per-thread counters of the query paths (benchmarks and tests read them).
+struct Stats {
+  std::int64_t side_calls = 0, side_in_shell = 0, side_fallback = 0;
+  std::int64_t segment_calls = 0, roots = 0, repairs = 0;
+  std::int64_t touch_refinements = 0;
+};
+Stats& stats();
+
+// A control point placed: rotation·(scale·x) + translate, in the operation order of STL
+// vertices (stl_mesh.cpp), so boxes computed from descriptors agree with bodies bit for bit.
+Vec3 place(const NurbsSurface& surface, const Vec3& x);
+
+// Builds the body of the placed patches. Returns "" or the problem, field suffix first
+// (".patches[2].v_max: meets no other patch boundary ...").
+std::string build(const NurbsSurface& surface, Body& out);
+
+// The body of a descriptor, built once per process (families answer many questions about
+// the same descriptor, and every partition's oracle builds its own). Throws nothing: a
+// descriptor that does not build gives nullptr and its problem in `problem`.
+std::shared_ptr<const Body> cached_body(const NurbsSurface& surface, std::string* problem = nullptr);
+
+// +1 inside, 0 within τ of the surface, −1 outside.
+int side(const Body& body, const Vec3& p);
+// Parameters t in (0, 1) where the open segment a→b meets the surface, ascending, roots
+// closer than τ merged.
+void segment_roots(const Body& body, const Vec3& a, const Vec3& b, std::vector<double>& ts);
+// Does the surface come within τ of the closed box? Never false when it meets it.
+bool touches_box(const Body& body, const Box3& box);
+// Distance from p to the surface, and the nearest point's outward normal (not unit;
+// zero where it is undefined: a pole, a crease of the parametrisation).
+double distance(const Body& body, const Vec3& p, Vec3* normal = nullptr);
+// Do the closed regions of a and b come within gap of each other? Never false when they
+// do; true also when they miss by less than the subdivision resolves (over-refinement only).
+bool within(const Body& a, const Body& b, double gap);
+double volume(const Body& body);
+double area(const Body& body);
+// Points on the exact surface about `spacing` apart (at least every tessellation vertex).
+std::vector<Vec3> surface_points(const Body& body, double spacing);
+
+}  // namespace cisamr::geometry::surface
