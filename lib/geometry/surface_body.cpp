@@ -11,6 +11,7 @@
 #include <map>
 #include <mutex>
 #include <numeric>
+#include <set>
 
 #include "core/vec_math.hpp"
 #include "geometry/nurbs_bezier.hpp"
@@ -90,6 +91,28 @@ double curve_gap(const SideCurve& a, const SideCurve& b, bool reversed) {
     }
   }
   return gap;
+}
+
+// FNV-1a over bytes, and over every number of a set of patches.
+void fnv1a(std::uint64_t& h, const void* data, std::size_t n) {
+  const auto* b = static_cast<const unsigned char*>(data);
+  for (std::size_t i = 0; i < n; ++i) h = (h ^ b[i]) * 1099511628211ull;
+}
+
+std::uint64_t patches_hash(const std::vector<NurbsPatch>& patches) {
+  std::uint64_t h = 1469598103934665603ull;
+  for (const NurbsPatch& p : patches) {
+    fnv1a(h, p.degree.data(), sizeof p.degree);
+    for (const auto* v : {&p.knots_u, &p.knots_v, &p.weights}) {
+      const std::size_t n = v->size();
+      fnv1a(h, &n, sizeof n);
+      fnv1a(h, v->data(), n * sizeof(double));
+    }
+    const std::size_t n = p.control_points.size();
+    fnv1a(h, &n, sizeof n);
+    fnv1a(h, p.control_points.data(), n * sizeof(Vec3));
+  }
+  return h;
 }
 
 // ---------------------------------------------------------------- small helpers
@@ -475,6 +498,7 @@ std::string build(const NurbsSurface& surface, Body& body) {
         body.max_thickness = std::max(body.max_thickness, c.hi - c.lo);
         const auto cell_id = static_cast<std::int32_t>(body.cells.size());
         body.cells.push_back(c);
+        body.cell_pieces.push_back(sub_piece);
         // Triangles: the quad split along its shorter diagonal; corners welded into one
         // (a pole) leave one triangle or none.
         auto emit = [&](std::int32_t a, std::int32_t b, std::int32_t d) {
@@ -510,7 +534,25 @@ std::string build(const NurbsSurface& surface, Body& body) {
     for (Cell& c : body.cells) c.outward = static_cast<std::int8_t>(-c.outward);
   }
 
-  const std::string problem = stl::build_indexed(vertices, faces, body.mesh, true);
+  // The checks of the tessellation (closed, manifold, oriented, no self-intersection) hold
+  // under a similarity: the same unplaced patches on the same grid give the same
+  // tessellation placed by scale, rotation and translation. So one shape placed many times
+  // (a packing of one particle) is checked once per process.
+  std::uint64_t shape_key = patches_hash(surface.patches);
+  for (int k = 0; k < np; ++k) fnv1a(shape_key, &nu[k], sizeof nu[k]), fnv1a(shape_key, &nv[k], sizeof nv[k]);
+  static std::mutex checked_mutex;
+  static std::set<std::uint64_t> checked;
+  bool known = false;
+  {
+    std::lock_guard<std::mutex> lock(checked_mutex);
+    known = checked.count(shape_key) > 0;
+  }
+  const std::string problem = stl::build_indexed(vertices, faces, body.mesh, !known);
+  if (problem.empty() && !known) {
+    std::lock_guard<std::mutex> lock(checked_mutex);
+    if (checked.size() >= 4096) checked.clear();
+    checked.insert(shape_key);
+  }
   if (!problem.empty()) {
     const std::vector<std::int64_t> named = faces_named(problem);
     auto patch_of = [&](std::int64_t f) { return body.cells[static_cast<std::size_t>(face_cell[static_cast<std::size_t>(f)])].patch; };
@@ -533,26 +575,10 @@ std::string build(const NurbsSurface& surface, Body& body) {
 }
 
 std::shared_ptr<const Body> cached_body(const NurbsSurface& surface, std::string* problem) {
-  // FNV-1a over every number of the descriptor.
-  std::uint64_t h = 1469598103934665603ull;
-  auto mix = [&](const void* data, std::size_t n) {
-    const auto* b = static_cast<const unsigned char*>(data);
-    for (std::size_t i = 0; i < n; ++i) h = (h ^ b[i]) * 1099511628211ull;
-  };
-  for (const NurbsPatch& p : surface.patches) {
-    mix(p.degree.data(), sizeof p.degree);
-    for (const auto* v : {&p.knots_u, &p.knots_v, &p.weights}) {
-      const std::size_t n = v->size();
-      mix(&n, sizeof n);
-      mix(v->data(), n * sizeof(double));
-    }
-    const std::size_t n = p.control_points.size();
-    mix(&n, sizeof n);
-    mix(p.control_points.data(), n * sizeof(Vec3));
-  }
-  mix(&surface.scale, sizeof surface.scale);
-  mix(&surface.rotation, sizeof surface.rotation);
-  mix(&surface.translate, sizeof surface.translate);
+  std::uint64_t h = patches_hash(surface.patches);
+  fnv1a(h, &surface.scale, sizeof surface.scale);
+  fnv1a(h, &surface.rotation, sizeof surface.rotation);
+  fnv1a(h, &surface.translate, sizeof surface.translate);
 
   static std::mutex mutex;
   static std::map<std::uint64_t, std::pair<std::shared_ptr<const Body>, std::string>> cache;
@@ -585,9 +611,8 @@ struct Root {
   double s, t;  // local to the cell's restricted piece
 };
 
-nurbs::BezierPatch cell_piece(const Body& body, const Cell& c) {
-  return nurbs::restrict_patch(body.patches[static_cast<std::size_t>(c.patch)].pieces[static_cast<std::size_t>(c.piece)],
-                               c.s0, c.s1, c.t0, c.t1);
+const nurbs::BezierPatch& cell_piece(const Body& body, const Cell& c) {
+  return body.cell_pieces[static_cast<std::size_t>(&c - body.cells.data())];
 }
 
 bool in_shell(const Cell& c, const Vec3& p) {
@@ -961,7 +986,7 @@ std::vector<Vec3> surface_points(const Body& body, double spacing) {
   for (const Cell& c : body.cells) {
     const double diag = norm(sub(c.box.max, c.box.min));
     const int n = std::clamp(static_cast<int>(std::ceil(diag / std::max(spacing, 1e-300))), 1, 64);
-    const nurbs::BezierPatch piece = cell_piece(body, c);
+    const nurbs::BezierPatch& piece = cell_piece(body, c);
     for (int j = 0; j < n; ++j)
       for (int i = 0; i < n; ++i) out.push_back(nurbs::evaluate(piece, (i + 0.5) / n, (j + 0.5) / n));
   }

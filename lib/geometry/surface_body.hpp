@@ -35,6 +35,7 @@ struct Cell {
 struct Body {
   std::vector<nurbs::PatchPieces> patches;  // placed control points
   std::vector<Cell> cells;
+  std::vector<nurbs::BezierPatch> cell_pieces;  // each cell's piece restricted to its rectangle
   FlatBvh<3> cell_bvh;  // over the cells' boxes
   stl::Mesh mesh;       // the tessellation (outward faces)
   Box3 box{};           // holds the surface
