@@ -1,0 +1,131 @@
+// Exact rational NURBS sphere and torus meshed as inclusions (issue #14, must show 1): every
+// interface node within 1e-9 of the domain size of the analytic surface, no tetrahedron
+// above 5, conforming, and the phase volume error converging with h as for the analytic
+// twin scene (the same shapes as `sphere`, and the torus against its analytic volume).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <functional>
+#include <memory>
+
+#include "core/vec_math.hpp"
+#include "geometry/oracle.hpp"
+#include "pipeline/pipeline.hpp"
+#include "quality/quality.hpp"
+#include "support/random_nurbs3.hpp"
+
+namespace cisamr {
+namespace {
+
+namespace rn = cisamr::testing::nurbs3;
+constexpr double kPi = 3.14159265358979323846;
+const Vec3 kCentre{0.5013, 0.4987, 0.5021};  // off the lattice's symmetry planes
+
+geometry::SceneDesc unit_box_scene(double h, int levels) {
+  geometry::SceneDesc s;
+  s.dimension = 3;
+  s.domain_min = {0, 0, 0};
+  s.domain_max = {1, 1, 1};
+  s.h = h;
+  s.levels = levels;
+  s.phases = {{1, "matrix", false}, {2, "particle", false}};
+  return s;
+}
+
+struct Meshed {
+  std::size_t tets = 0;
+  double inclusion_volume = 0;  // meshed volume of phase 2
+  double worst_interface_error = 0;  // largest |f(x)| over nodes of both phases
+  double max_aspect = 0;
+  std::size_t above_bound = 0;
+  bool conforming = false;
+};
+
+// Meshes the scene and measures the interface nodes with f, the analytic distance.
+Meshed mesh_and_measure(const geometry::SceneDesc& scene, const std::function<double(const Vec3&)>& f) {
+  geometry::Oracle3 oracle(scene);
+  const auto r = pipeline::mesh(oracle);
+  const mesh::Mesh3& m = r.mesh;
+  Meshed out;
+  out.tets = m.cell_count();
+  std::vector<std::uint8_t> phases(m.node_count(), 0);
+  for (std::size_t c = 0; c < m.cell_count(); ++c) {
+    const LocalId* n = m.cell(c);
+    const std::uint8_t bit = m.cell_phase[c] == 2 ? 2 : 1;
+    for (int k = 0; k < 4; ++k) phases[static_cast<std::size_t>(n[k])] |= bit;
+    if (m.cell_phase[c] == 2) {
+      const Vec3 a = m.point(n[0]), b = m.point(n[1]), cc = m.point(n[2]), d = m.point(n[3]);
+      const Vec3 u = sub(b, a), v = sub(cc, a), w = sub(d, a);
+      out.inclusion_volume += dot(u, cross(v, w)) / 6;
+    }
+  }
+  for (std::size_t i = 0; i < m.node_count(); ++i)
+    if (phases[i] == 3) out.worst_interface_error = std::max(out.worst_interface_error, std::abs(f(m.point(static_cast<LocalId>(i)))));
+  const auto aspect = quality::aspect_statistics<3>(m, 5.0, 1);
+  out.max_aspect = aspect.max;
+  out.above_bound = aspect.above_bound;
+  const Box3 domain{{0, 0, 0}, {1, 1, 1}};
+  out.conforming = quality::check_conformity(m, domain, 1.0, false, 1e-9).ok;
+  return out;
+}
+
+TEST(NurbsMesh3, ExactSphereMeshesOnTheSphereAndConvergesLikeIt) {
+  const double r = 0.3, diag = std::sqrt(3.0);
+  const auto f = [&](const Vec3& x) { return norm(sub(x, kCentre)) - r; };
+  double errors[2][2];  // [nurbs, analytic][h, h/2]
+  for (int level = 0; level < 2; ++level) {
+    const double h = level == 0 ? 0.1 : 0.05;
+    geometry::SceneDesc nurbs = unit_box_scene(h, 1), analytic = nurbs;
+    nurbs.inclusions = {{rn::exact_sphere(kCentre, r), 2, 1}};
+    analytic.inclusions = {{geometry::Sphere{kCentre, r}, 2, 1}};
+    const Meshed a = mesh_and_measure(nurbs, f), b = mesh_and_measure(analytic, f);
+    SCOPED_TRACE("h = " + std::to_string(h));
+    EXPECT_TRUE(a.conforming);
+    EXPECT_LE(a.max_aspect, 5.0);
+    EXPECT_EQ(a.above_bound, 0u);
+    EXPECT_LE(a.worst_interface_error, 1e-9 * diag);
+    // The same refinement as the analytic sphere: element counts within 0.5 %.
+    EXPECT_NEAR(double(a.tets), double(b.tets), 0.005 * b.tets);
+    const double exact = 4.0 / 3 * kPi * r * r * r;
+    errors[0][level] = std::abs(a.inclusion_volume - exact) / exact;
+    errors[1][level] = std::abs(b.inclusion_volume - exact) / exact;
+    // Within 2 % (of the error itself) of the analytic sphere's volume error.
+    EXPECT_NEAR(errors[0][level], errors[1][level], 0.02 * errors[1][level] + 1e-12);
+    std::printf("[nurbs3] sphere h %.3g: %zu tets (analytic %zu), aspect %.3f, interface %.2e, volume error %.3e "
+                "(analytic %.3e)\n", h, a.tets, b.tets, a.max_aspect, a.worst_interface_error, errors[0][level],
+                errors[1][level]);
+  }
+  // Second order, as the analytic sphere.
+  EXPECT_GT(errors[0][0] / errors[0][1], 2.5);
+  EXPECT_NEAR(errors[0][0] / errors[0][1], errors[1][0] / errors[1][1], 0.1 * errors[1][0] / errors[1][1]);
+}
+
+TEST(NurbsMesh3, ExactTorusMeshesOnTheTorusAndConverges) {
+  const double R = 0.28, r = 0.1, diag = std::sqrt(3.0);
+  const auto f = [&](const Vec3& x) {
+    const Vec3 d = sub(x, kCentre);
+    return std::hypot(std::hypot(d[0], d[1]) - R, d[2]) - r;
+  };
+  const double exact = 2 * kPi * kPi * R * r * r;
+  double errors[2];
+  for (int level = 0; level < 2; ++level) {
+    const double h = level == 0 ? 0.1 : 0.05;
+    geometry::SceneDesc scene = unit_box_scene(h, 2);
+    scene.inclusions = {{rn::exact_torus(kCentre, R, r), 2, 2}};
+    const Meshed a = mesh_and_measure(scene, f);
+    SCOPED_TRACE("h = " + std::to_string(h));
+    EXPECT_TRUE(a.conforming);
+    EXPECT_LE(a.max_aspect, 5.0);
+    EXPECT_EQ(a.above_bound, 0u);
+    EXPECT_LE(a.worst_interface_error, 1e-9 * diag);
+    errors[level] = std::abs(a.inclusion_volume - exact) / exact;
+    std::printf("[nurbs3] torus h %.3g: %zu tets, aspect %.3f, interface %.2e, volume error %.3e\n", h, a.tets,
+                a.max_aspect, a.worst_interface_error, errors[level]);
+  }
+  EXPECT_LT(errors[1], 0.02);
+  EXPECT_GT(errors[0] / errors[1], 2.5);
+}
+
+}  // namespace
+}  // namespace cisamr
