@@ -63,6 +63,10 @@ class NurbsSurfaceModel final : public SurfaceModel {
     }
   }
 
+  bool approximate_sections() const override { return true; }
+  void x_breakpoints(std::vector<double>& out) const override { surface::x_extremes(*body_, out); }
+  void y_breakpoints_at(double x, std::vector<double>& out) const override { surface::y_extremes_at(*body_, x, out); }
+
   std::vector<Vec3> boundary_points(int per_axis) const override {
     return surface::surface_points(*body_, body_->size / std::max(per_axis, 1));
   }

@@ -122,6 +122,9 @@ class ShapeModel {
   // Gradient direction of a curved boundary at p (not normalised); false for flat pieces.
   // Used to probe the cusp between touching shapes.
   virtual bool outward_normal(const Point& /*p*/, Point& /*n*/) const { return false; }
+  // Crossings of near-tangent lines carry more than analytic rounding (measures are
+  // integrated to a looser tolerance over such shapes).
+  virtual bool approximate_sections() const { return false; }
   // x coordinates where the phase length on a line x = const has a kink (beyond box()).
   virtual void x_breakpoints(std::vector<double>& /*out*/) const {}
   // An exact or analytic answer to "do the regions meet" for this pair of families, if

@@ -955,6 +955,73 @@ bool within(const Body& a, const Body& b, double gap) {
   return false;
 }
 
+namespace {
+
+// The smallest value of sign·x[axis] over the surface (with plane_axis >= 0: over its
+// section by x[plane_axis] = plane), to about eps: best-first halving of the cells' pieces,
+// ordered by their control boxes' lower bound, until the best box is smaller than eps.
+double surface_extreme(const Body& body, int axis, double sign, int plane_axis, double plane, double eps, bool& found) {
+  struct Item {
+    double key;
+    nurbs::BezierPatch piece;
+  };
+  const auto worse = [](const Item& x, const Item& y) { return x.key > y.key; };
+  std::vector<Item> heap;
+  const auto push = [&](nurbs::BezierPatch piece) {
+    const Box3 b = nurbs::control_box(piece);
+    if (plane_axis >= 0 && !(b.min[plane_axis] <= plane && plane <= b.max[plane_axis])) return;
+    heap.push_back({sign > 0 ? b.min[axis] : -b.max[axis], std::move(piece)});
+    std::push_heap(heap.begin(), heap.end(), worse);
+  };
+  for (const nurbs::BezierPatch& piece : body.cell_pieces) push(piece);
+  found = false;
+  for (int step = 0; step < 100000 && !heap.empty(); ++step) {
+    std::pop_heap(heap.begin(), heap.end(), worse);
+    Item best = std::move(heap.back());
+    heap.pop_back();
+    const Box3 b = nurbs::control_box(best.piece);
+    if (norm(sub(b.max, b.min)) <= eps || step == 99999) {
+      found = true;
+      return best.key;
+    }
+    const nurbs::BezierPatch& q = best.piece;
+    const int p = q.degree_u, r = q.degree_v;
+    nurbs::BezierPatch lo, hi;
+    if (norm(sub(q.cartesian(p, 0), q.cartesian(0, 0))) + norm(sub(q.cartesian(p, r), q.cartesian(0, r))) >=
+        norm(sub(q.cartesian(0, r), q.cartesian(0, 0))) + norm(sub(q.cartesian(p, r), q.cartesian(p, 0))))
+      nurbs::halve_u(q, lo, hi);
+    else
+      nurbs::halve_v(q, lo, hi);
+    push(std::move(lo));
+    push(std::move(hi));
+  }
+  return 0;
+}
+
+}  // namespace
+
+void x_extremes(const Body& body, std::vector<double>& out) {
+  bool found = false;
+  const double eps = 1e-12 * body.size;
+  const double lo = surface_extreme(body, 0, 1, -1, 0, eps, found);
+  if (found) out.push_back(lo);
+  const double hi = -surface_extreme(body, 0, -1, -1, 0, eps, found);
+  if (found) out.push_back(hi);
+}
+
+void y_extremes_at(const Body& body, double x, std::vector<double>& out) {
+  if (!(x >= body.box.min[0] && x <= body.box.max[0])) return;
+  bool found = false;
+  // Coarser than x_extremes: along a section the boxes below the extreme multiply as they
+  // shrink (≈ eps^(-1/2)); a kink displaced by 1e-6 of the size costs the quadrature a
+  // few halvings.
+  const double eps = 1e-6 * body.size;
+  const double lo = surface_extreme(body, 1, 1, 0, x, eps, found);
+  if (found) out.push_back(lo);
+  const double hi = -surface_extreme(body, 1, -1, 0, x, eps, found);
+  if (found) out.push_back(hi);
+}
+
 double volume(const Body& body) {
   double v = 0;
   for (std::size_t k = 0; k < body.patches.size(); ++k) {

@@ -78,6 +78,11 @@ double distance(const Body& body, const Vec3& p, Vec3* normal = nullptr);
 // Do the closed regions of a and b come within gap of each other? Never false when they
 // do; true also when they miss by less than the subdivision resolves (over-refinement only).
 bool within(const Body& a, const Body& b, double gap);
+// The extremes of x over the surface, and of y over its section at x (where the length of a
+// line through the body has a square-root kink: breakpoints of the oracle's measures), to
+// about 1e-12 (x) and 1e-6 (y) of the size. Interior tangencies (a torus's hole) are not among them.
+void x_extremes(const Body& body, std::vector<double>& out);
+void y_extremes_at(const Body& body, double x, std::vector<double>& out);
 double volume(const Body& body);
 double area(const Body& body);
 // Points on the exact surface about `spacing` apart (at least every tessellation vertex).
