@@ -1,4 +1,4 @@
-// The oracle's view of a NURBS surface body (README: shape concept; design in
+// The oracle's view of a surface body (NURBS patches, STEP solids) (README: shape concept; design in
 // docs/nurbs-step-design.md §2.3–2.5): classification, crossings, touches, distances and
 // the volume, all through surface_body on the exact surface.
 #include "geometry/nurbs_surface_model.hpp"
@@ -12,18 +12,9 @@
 namespace cisamr::geometry {
 namespace {
 
-class NurbsSurfaceModel final : public SurfaceModel {
+class BodyModel final : public SurfaceModel {
  public:
-  NurbsSurfaceModel(const Shape& shape, const std::string& source, const std::string& field) : SurfaceModel(shape) {
-    std::string problem;
-    body_ = surface::cached_body(std::get<NurbsSurface>(shape), &problem);
-    if (!body_) {
-      // The problem starts with the field suffix: ".patches[2].v_max: ...".
-      const std::size_t colon = problem.find(": ");
-      const std::string suffix = colon == std::string::npos ? "" : problem.substr(0, colon);
-      const std::string what = colon == std::string::npos ? problem : problem.substr(colon + 2);
-      throw InputError(source, field + suffix, what);
-    }
+  BodyModel(const Shape& shape, std::shared_ptr<const surface::Body> body) : SurfaceModel(shape), body_(std::move(body)) {
     box_ = body_->box;
   }
 
@@ -79,7 +70,20 @@ class NurbsSurfaceModel final : public SurfaceModel {
 
 std::unique_ptr<SurfaceModel> make_nurbs_surface_model(const Shape& shape, const std::string& source,
                                                        const std::string& field) {
-  return std::make_unique<NurbsSurfaceModel>(shape, source, field);
+  std::string problem;
+  auto body = surface::cached_body(std::get<NurbsSurface>(shape), &problem);
+  if (!body) {
+    // The problem starts with the field suffix: ".patches[2].v_max: ...".
+    const std::size_t colon = problem.find(": ");
+    const std::string suffix = colon == std::string::npos ? "" : problem.substr(0, colon);
+    const std::string what = colon == std::string::npos ? problem : problem.substr(colon + 2);
+    throw InputError(source, field + suffix, what);
+  }
+  return std::make_unique<BodyModel>(shape, std::move(body));
+}
+
+std::unique_ptr<SurfaceModel> make_body_model(const Shape& shape, std::shared_ptr<const surface::Body> body) {
+  return std::make_unique<BodyModel>(shape, std::move(body));
 }
 
 }  // namespace cisamr::geometry

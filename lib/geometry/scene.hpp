@@ -2,6 +2,7 @@
 // The scene description (DESIGN.md §5) as plain data: what io reads and pack writes.
 // No geometry is evaluated here; see oracle.hpp for the queries.
 #include <array>
+#include <memory>
 #include <cstdlib>
 #include <cstdint>
 #include <string>
@@ -79,8 +80,22 @@ struct NurbsSurface {  // closed: the patches together bound a volume
   Vec3 translate{};
 };
 
+struct BrepData;  // brep_data.hpp
+// Solids of a STEP file, one inclusion for all those selected, placed as STL surfaces are
+// (x' = rotation·(scale·x) + translate, x in the file's millimetres).
+struct StepSolids {
+  std::string file;         // resolved path
+  std::vector<int> solids;  // indices in the file's solid order; empty: every solid
+  double scale = 1;
+  Rotation3 rotation{{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}};
+  Vec3 translate{};
+  // The file as imported (io fills it; geometry never opens files); null where the reader
+  // defers loading.
+  std::shared_ptr<const BrepData> brep;
+};
+
 using Shape = std::variant<Circle, Ellipse, Polygon, NurbsCurve, Sphere, Ellipsoid, Cylinder,
-                           StlSurface, NurbsSurface>;
+                           StlSurface, NurbsSurface, StepSolids>;
 
 struct Inclusion {
   Shape shape;

@@ -7,6 +7,7 @@
 #include <array>
 #include <cstddef>
 #include <functional>
+#include <memory>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -25,6 +26,14 @@ bool is_identity(const Rotation3& r);
 struct SurfaceFile {
   std::string path;                           // absolute, normalised
   std::vector<std::array<Vec3, 3>> triangles;  // empty where the reader defers loading
+};
+
+struct BrepData;
+// A STEP file named by a field: resolved, imported once per process (null where the
+// reader defers loading).
+struct StepFile {
+  std::string path;
+  std::shared_ptr<const BrepData> brep;
 };
 
 // Every getter but has() reads a required member (missing: "missing required field") and
@@ -69,6 +78,8 @@ class FieldReader {
   // A triangulated surface file (STL): a non-empty name, resolved; loaded or only checked
   // to be readable as the scene reader's options ask.
   virtual SurfaceFile surface_file(std::string_view key) const = 0;
+  // A STEP file: a non-empty name, resolved, imported (errors name the file).
+  virtual StepFile step_file(std::string_view key) const = 0;
 
   template <int N>
   Vec<N> vec(std::string_view key) const {

@@ -14,6 +14,7 @@
 #include "geometry/shape_polygon.hpp"
 #include "geometry/shape_sphere_ellipsoid.hpp"
 #include "geometry/shape_stl.hpp"
+#include "geometry/shape_step.hpp"
 
 namespace cisamr::geometry {
 
@@ -30,6 +31,7 @@ const std::array<const ShapeFamily*, std::variant_size_v<Shape>>& families() {
       &cylinder_family(),   // Cylinder
       &stl_family(),        // StlSurface
       &nurbs_surface_family(),  // NurbsSurface
+      &step_family(),           // StepSolids
   };
   return all;
 }

@@ -574,6 +574,230 @@ std::string build(const NurbsSurface& surface, Body& body) {
   return "";
 }
 
+
+namespace {
+
+Vec3 place_point(const Placement& pl, const Vec3& v) {
+  Vec3 w{};
+  for (int r = 0; r < 3; ++r)
+    w[r] = pl.rotation[r][0] * (pl.scale * v[0]) + pl.rotation[r][1] * (pl.scale * v[1]) +
+           pl.rotation[r][2] * (pl.scale * v[2]) + pl.translate[r];
+  return w;
+}
+
+// A trimming curve as a polyline in (u, v): each Bézier span at 32 points.
+void polygonize(const BrepCurve2& c, std::vector<Vec2>& out) {
+  std::vector<std::array<double, 3>> hom;
+  for (std::size_t i = 0; i < c.control_points.size(); ++i) {
+    const double w = i < c.weights.size() ? c.weights[i] : 1.0;
+    hom.push_back({w * c.control_points[i][0], w * c.control_points[i][1], w});
+  }
+  const nurbs::BezierPieces<3> pieces = nurbs::extract_bezier<3>(c.degree, c.knots, hom);
+  for (const std::vector<double>& h : pieces.points)
+    for (int k = 0; k < 32; ++k) {
+      double H[3], D[3];
+      nurbs::eval_hom<3>(h.data(), c.degree, k / 32.0, H, D);
+      out.push_back({H[0] / H[2], H[1] / H[2]});
+    }
+}
+
+// The uv boxes of a trimming curve's Bézier spans (their control points).
+void span_boxes(const BrepCurve2& c, std::vector<std::array<double, 4>>& out) {
+  std::vector<std::array<double, 3>> hom;
+  for (std::size_t i = 0; i < c.control_points.size(); ++i) {
+    const double w = i < c.weights.size() ? c.weights[i] : 1.0;
+    hom.push_back({w * c.control_points[i][0], w * c.control_points[i][1], w});
+  }
+  const nurbs::BezierPieces<3> pieces = nurbs::extract_bezier<3>(c.degree, c.knots, hom);
+  for (const std::vector<double>& h : pieces.points) {
+    std::array<double, 4> b{kInf, -kInf, kInf, -kInf};
+    for (int k = 0; k <= c.degree; ++k) {
+      const double u = h[3 * k] / h[3 * k + 2], v = h[3 * k + 1] / h[3 * k + 2];
+      b[0] = std::min(b[0], u), b[1] = std::max(b[1], u), b[2] = std::min(b[2], v), b[3] = std::max(b[3], v);
+    }
+    out.push_back(b);
+  }
+}
+
+}  // namespace
+
+std::string build_brep(const BrepData& data, const std::vector<int>& solids, const Placement& pl, Body& body) {
+  body = Body{};
+  std::vector<int> chosen = solids;
+  if (chosen.empty())
+    for (std::size_t k = 0; k < data.solids.size(); ++k) chosen.push_back(static_cast<int>(k));
+  if (chosen.empty()) return ": no solid";
+  std::vector<Vec3> vertices;
+  std::vector<std::array<std::int32_t, 3>> faces;
+  std::vector<std::int32_t> face_patch, face_solid;
+  std::vector<std::array<Vec2, 3>> face_uv;
+  std::vector<std::int8_t> patch_outward;
+  double volume = 0;
+  bool any_trimmed = false;
+  for (int si : chosen) {
+    if (si < 0 || static_cast<std::size_t>(si) >= data.solids.size()) return ": no solid " + std::to_string(si);
+    const BrepSolid& solid = data.solids[static_cast<std::size_t>(si)];
+    const auto patch_base = static_cast<std::int32_t>(body.patches.size());
+    const auto vertex_base = static_cast<std::int32_t>(vertices.size());
+    for (std::size_t f = 0; f < solid.faces.size(); ++f) {
+      const BrepFace& face = solid.faces[f];
+      NurbsPatch placed = face.surface;
+      for (Vec3& v : placed.control_points) v = place_point(pl, v);
+      body.patches.emplace_back();
+      const std::string problem = nurbs::extract_patch(placed, body.patches.back());
+      if (!problem.empty()) return ": solid " + std::to_string(si) + " face " + std::to_string(f) + problem;
+      patch_outward.push_back(face.reversed ? -1 : 1);
+      // Trims: none where the loops run along the parameter rectangle.
+      const nurbs::PatchPieces& pp = body.patches.back();
+      const double u0 = pp.pieces.front().u0, u1 = pp.pieces.back().u1;
+      const double v0 = pp.pieces.front().v0, v1 = pp.pieces.back().v1;
+      const double slack = 1e-6 * std::max(u1 - u0, v1 - v0);
+      std::vector<std::vector<Vec2>> loops;
+      bool rectangle = true;
+      for (const auto& loop : face.loops) {
+        std::vector<Vec2> poly;
+        for (const BrepCurve2& c : loop) polygonize(c, poly);
+        for (const Vec2& q : poly)
+          rectangle = rectangle && (std::abs(q[0] - u0) <= slack || std::abs(q[0] - u1) <= slack ||
+                                    std::abs(q[1] - v0) <= slack || std::abs(q[1] - v1) <= slack);
+        loops.push_back(std::move(poly));
+      }
+      if (rectangle) loops.clear();
+      any_trimmed = any_trimmed || !loops.empty();
+      body.trims.push_back(std::move(loops));
+      body.trim_slack.push_back(slack);
+    }
+    for (const Vec3& v : solid.vertices) vertices.push_back(place_point(pl, v));
+    for (std::size_t t = 0; t < solid.triangles.size(); ++t) {
+      const auto& tri = solid.triangles[t];
+      faces.push_back({tri[0] + vertex_base, tri[1] + vertex_base, tri[2] + vertex_base});
+      face_patch.push_back(patch_base + solid.triangle_face[t]);
+      face_solid.push_back(si);
+      face_uv.push_back(solid.triangle_uv[t]);
+    }
+    volume += solid.volume * pl.scale * pl.scale * pl.scale;
+  }
+  if (faces.empty()) return ": no triangles";
+  Box3 box = empty_box();
+  for (const Vec3& v : vertices) grow(box, v);
+  body.size = norm(sub(box.max, box.min));
+  body.tolerance = 1e-12 * body.size;
+
+  // Cells: per triangle, per piece its (u, v) box meets; per trimming-curve span likewise.
+  const auto add_cells = [&](std::int32_t k, double ua, double ub, double va, double vb, const Vec3* tri) {
+    const nurbs::PatchPieces& pp = body.patches[static_cast<std::size_t>(k)];
+    for (std::size_t q = 0; q < pp.pieces.size(); ++q) {
+      const nurbs::BezierPatch& piece = pp.pieces[q];
+      if (piece.u1 < ua || piece.u0 > ub || piece.v1 < va || piece.v0 > vb) continue;
+      Cell c;
+      c.patch = k;
+      c.piece = static_cast<std::int32_t>(q);
+      const double hu = piece.u1 - piece.u0, hv = piece.v1 - piece.v0;
+      c.s0 = std::clamp((ua - piece.u0) / hu, 0.0, 1.0), c.s1 = std::clamp((ub - piece.u0) / hu, 0.0, 1.0);
+      c.t0 = std::clamp((va - piece.v0) / hv, 0.0, 1.0), c.t1 = std::clamp((vb - piece.v0) / hv, 0.0, 1.0);
+      c.outward = patch_outward[static_cast<std::size_t>(k)];
+      const nurbs::BezierPatch sub_piece = nurbs::restrict_patch(piece, c.s0, c.s1, c.t0, c.t1);
+      if (tri) {
+        c.normal = unit(cross(sub(tri[1], tri[0]), sub(tri[2], tri[0])));
+      } else {
+        Vec3 ds, dt;
+        nurbs::evaluate(sub_piece, 0.5, 0.5, &ds, &dt);
+        c.normal = unit(cross(ds, dt));
+      }
+      if (c.normal == Vec3{0, 0, 0}) c.normal = {1, 0, 0};
+      c.box = nurbs::control_box(sub_piece);
+      const std::array<double, 2> sl = nurbs::slab(sub_piece, c.normal);
+      c.lo = sl[0], c.hi = sl[1];
+      if (tri)
+        for (int i = 0; i < 3; ++i) {
+          grow(c.box, tri[i]);
+          c.lo = std::min(c.lo, dot(c.normal, tri[i])), c.hi = std::max(c.hi, dot(c.normal, tri[i]));
+        }
+      body.cells.push_back(c);
+      body.cell_pieces.push_back(sub_piece);
+    }
+  };
+  std::vector<double> edge_gap(body.patches.size(), 0);
+  {
+    std::size_t k = 0;
+    for (int si : chosen)
+      for (const BrepFace& face : data.solids[static_cast<std::size_t>(si)].faces)
+        edge_gap[k++] = std::max(face.edge_tolerance, face.tolerance) * pl.scale;
+  }
+  for (std::size_t t = 0; t < faces.size(); ++t) {
+    const Vec3 tri[3] = {vertices[static_cast<std::size_t>(faces[t][0])], vertices[static_cast<std::size_t>(faces[t][1])],
+                         vertices[static_cast<std::size_t>(faces[t][2])]};
+    double ua = kInf, ub = -kInf, va = kInf, vb = -kInf;
+    for (const Vec2& q : face_uv[t]) ua = std::min(ua, q[0]), ub = std::max(ub, q[0]), va = std::min(va, q[1]), vb = std::max(vb, q[1]);
+    const std::size_t first = body.cells.size();
+    add_cells(face_patch[t], ua, ub, va, vb, tri);
+    // The triangle's corners lie on its face within the face's tolerance, and neighbouring
+    // faces meet within their edges' tolerances.
+    double gap = edge_gap[static_cast<std::size_t>(face_patch[t])];
+    for (int i = 0; i < 3; ++i) {
+      const Vec3 s = nurbs::evaluate(body.patches[static_cast<std::size_t>(face_patch[t])], face_uv[t][i][0], face_uv[t][i][1]);
+      gap = std::max(gap, norm(sub(s, tri[i])));
+    }
+    for (std::size_t c = first; c < body.cells.size(); ++c) {
+      Cell& cell = body.cells[c];
+      const double w = gap + 8 * kUnit * max_abs(cell.box) + body.tolerance;
+      for (int d = 0; d < 3; ++d) cell.box.min[d] -= w, cell.box.max[d] += w;
+      cell.lo -= w, cell.hi += w;
+      body.max_thickness = std::max(body.max_thickness, cell.hi - cell.lo);
+    }
+  }
+  // Trimmed faces: the surface between a boundary triangle's chord and its trimming curve.
+  for (std::size_t k = 0; k < body.patches.size(); ++k) {
+    if (body.trims[k].empty()) continue;
+    std::size_t at = 0;
+    const BrepFace* face = nullptr;
+    for (int si : chosen)
+      for (const BrepFace& f : data.solids[static_cast<std::size_t>(si)].faces)
+        if (at++ == k) face = &f;
+    std::vector<std::array<double, 4>> boxes;
+    for (const auto& loop : face->loops)
+      for (const BrepCurve2& c : loop) span_boxes(c, boxes);
+    const std::size_t n = boxes.size();
+    for (std::size_t i = 0; i < n; ++i) {
+      // Each span's box, and the box of it and the next (a chord across two spans).
+      const std::array<double, 4>& a = boxes[i];
+      const std::array<double, 4>& b = boxes[(i + 1) % n];
+      for (const auto& r : {a, std::array<double, 4>{std::min(a[0], b[0]), std::max(a[1], b[1]), std::min(a[2], b[2]),
+                                                      std::max(a[3], b[3])}}) {
+        const std::size_t first = body.cells.size();
+        add_cells(static_cast<std::int32_t>(k), r[0], r[1], r[2], r[3], nullptr);
+        for (std::size_t c = first; c < body.cells.size(); ++c) {
+          Cell& cell = body.cells[c];
+          const double w = edge_gap[k] + 8 * kUnit * max_abs(cell.box) + body.tolerance;
+          for (int d = 0; d < 3; ++d) cell.box.min[d] -= w, cell.box.max[d] += w;
+          cell.lo -= w, cell.hi += w;
+          body.max_thickness = std::max(body.max_thickness, cell.hi - cell.lo);
+        }
+      }
+    }
+  }
+  const std::string problem = stl::build_indexed(vertices, faces, body.mesh, true);
+  if (!problem.empty()) {
+    const std::vector<std::int64_t> named = faces_named(problem);
+    if (problem.rfind("self-intersecting", 0) == 0 && named.size() == 2) {
+      const auto fa = static_cast<std::size_t>(named[0]), fb = static_cast<std::size_t>(named[1]);
+      const std::string where = format_point(vertices[static_cast<std::size_t>(faces[fa][0])]);
+      if (face_solid[fa] == face_solid[fb])
+        return ": solid " + std::to_string(face_solid[fa]) + " intersects itself (tessellation, near " + where + ")";
+      return ": solids " + std::to_string(face_solid[fa]) + " and " + std::to_string(face_solid[fb]) +
+             " intersect (tessellation, near " + where + ")";
+    }
+    return ": tessellation: " + problem;
+  }
+  std::vector<Box3> boxes(body.cells.size());
+  body.box = box;
+  for (std::size_t c = 0; c < boxes.size(); ++c) boxes[c] = body.cells[c].box, grow(body.box, boxes[c].min), grow(body.box, boxes[c].max);
+  body.cell_bvh.build(boxes);
+  body.exact_volume = volume;
+  if (any_trimmed) body.exact_area = stl::surface_area(body.mesh);
+  return "";
+}
+
 std::shared_ptr<const Body> cached_body(const NurbsSurface& surface, std::string* problem) {
   std::uint64_t h = patches_hash(surface.patches);
   fnv1a(h, &surface.scale, sizeof surface.scale);
@@ -613,6 +837,27 @@ struct Root {
 
 const nurbs::BezierPatch& cell_piece(const Body& body, const Cell& c) {
   return body.cell_pieces[static_cast<std::size_t>(&c - body.cells.data())];
+}
+
+// Does (u, v) lie in patch k's trimmed region, or within its slack of a loop?
+bool in_trim(const Body& body, std::int32_t k, double u, double v) {
+  if (body.trims.empty()) return true;
+  const auto& loops = body.trims[static_cast<std::size_t>(k)];
+  if (loops.empty()) return true;
+  const double slack = body.trim_slack[static_cast<std::size_t>(k)];
+  bool inside = false;
+  for (const std::vector<Vec2>& loop : loops)
+    for (std::size_t i = 0, j = loop.size() - 1; i < loop.size(); j = i++) {
+      const Vec2 &a = loop[j], &b = loop[i];
+      if ((a[1] > v) != (b[1] > v) && u < a[0] + (v - a[1]) * (b[0] - a[0]) / (b[1] - a[1])) inside = !inside;
+      // Distance to the edge a-b.
+      const double ex = b[0] - a[0], ey = b[1] - a[1];
+      const double len2 = ex * ex + ey * ey;
+      const double t = len2 > 0 ? std::clamp(((u - a[0]) * ex + (v - a[1]) * ey) / len2, 0.0, 1.0) : 0.0;
+      const double dx = u - (a[0] + t * ex), dy = v - (a[1] + t * ey);
+      if (dx * dx + dy * dy <= slack * slack) return true;
+    }
+  return inside;
 }
 
 bool in_shell(const Cell& c, const Vec3& p) {
@@ -673,7 +918,11 @@ void line_roots(const Body& body, const Vec3& a, const Vec3& b, double l0, doubl
                            if ((y0 < c.lo && y1 < c.lo) || (y0 > c.hi && y1 > c.hi)) return false;
                            found.clear();
                            nurbs::line_roots(cell_piece(body, c), query, found);
-                           for (const nurbs::LineRoot& r : found) out.push_back({r.lambda, ci, r.s, r.t});
+                           const nurbs::BezierPatch& piece = cell_piece(body, c);
+                           for (const nurbs::LineRoot& r : found)
+                             if (in_trim(body, c.patch, piece.u0 + r.s * (piece.u1 - piece.u0),
+                                         piece.v0 + r.t * (piece.v1 - piece.v0)))
+                               out.push_back({r.lambda, ci, r.s, r.t});
                            return false;
                          });
   std::sort(out.begin(), out.end(), [](const Root& x, const Root& y) {
@@ -1023,6 +1272,7 @@ void y_extremes_at(const Body& body, double x, std::vector<double>& out) {
 }
 
 double volume(const Body& body) {
+  if (body.exact_volume >= 0) return body.exact_volume;
   double v = 0;
   for (std::size_t k = 0; k < body.patches.size(); ++k) {
     // A patch's orientation: that of any of its cells.
@@ -1041,6 +1291,7 @@ double volume(const Body& body) {
 }
 
 double area(const Body& body) {
+  if (body.exact_area >= 0) return body.exact_area;
   double a = 0;
   for (const nurbs::PatchPieces& pp : body.patches)
     for (const nurbs::BezierPatch& piece : pp.pieces)

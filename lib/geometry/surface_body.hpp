@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "core/types.hpp"
+#include "geometry/brep_data.hpp"
 #include "geometry/flat_bvh.hpp"
 #include "geometry/nurbs3.hpp"
 #include "geometry/scene.hpp"
@@ -42,6 +43,20 @@ struct Body {
   double size = 0;      // box diagonal
   double tolerance = 0; // τ = 1e-12·size, the ON band
   double max_thickness = 0;  // thickest shell (hi − lo)
+  // Trimmed faces (STEP): per patch, its trimming loops as closed polygons in (u, v) (empty:
+  // the whole parameter rectangle), and the slack in (u, v) within which a root near a
+  // loop still counts (a root on an edge between two faces is found by both).
+  std::vector<std::vector<std::vector<Vec2>>> trims;
+  std::vector<double> trim_slack;
+  double exact_volume = -1;  // ≥ 0: the volume as imported (trimmed faces)
+  double exact_area = -1;
+};
+
+// A placement: x' = rotation·(scale·x) + translate.
+struct Placement {
+  double scale = 1;
+  Rotation3 rotation{{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}};
+  Vec3 translate{};
 };
 
 // Per-thread counters of the query paths (benchmarks and tests read them).
@@ -59,6 +74,12 @@ Vec3 place(const NurbsSurface& surface, const Vec3& x);
 // Builds the body of the placed patches. Returns "" or the problem, field suffix first
 // (".patches[2].v_max: meets no other patch boundary ...").
 std::string build(const NurbsSurface& surface, Body& out);
+
+// Builds the body of the selected solids of an imported STEP file (all of them when
+// `solids` is empty), placed: its faces' surfaces and trims, the import's mesh as the
+// tessellation, a cell per (triangle, Bézier piece its (u, v) box meets) and per span of a
+// trimming curve. Returns "" or the problem ("solid 1: faces 3 and 7 intersect …").
+std::string build_brep(const BrepData& data, const std::vector<int>& solids, const Placement& placement, Body& out);
 
 // The body of a descriptor, built once per process (families answer many questions about
 // the same descriptor, and every partition's oracle builds its own). Throws nothing: a

@@ -11,6 +11,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <random>
+#include <functional>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
@@ -23,6 +25,7 @@
 #include "core/vec_math.hpp"
 #include "geometry/nurbs3.hpp"
 #include "geometry/step_import.hpp"
+#include "geometry/surface_body.hpp"
 
 namespace cisamr::geometry {
 namespace {
@@ -479,6 +482,77 @@ TEST(StepImport, CoordinatesInMillimetres) {
   ASSERT_EQ(d.solids.size(), 1u);
   EXPECT_NEAR(d.solids[0].volume, 4e9 * kPi / 3, 1e-9 * 4e9 * kPi / 3);
   EXPECT_NEAR(d.solids[0].box.max[2], 1000.0, 1e-6);
+}
+
+// The bodies of the imported solids (surface_body::build_brep) classify and cross like the
+// analytic sphere, torus and filleted box, on the exact converted faces.
+TEST(StepBody, SolidsClassifyAndCrossLikeTheirAnalyticForms) {
+  SKIP_WITHOUT_OCCT();
+  const BrepData& data = parts();
+  ASSERT_EQ(data.solids.size(), 3u);
+  const auto sphere_f = [](const Vec3& x) { return std::sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]) - 1; };
+  const auto torus_f = [](const Vec3& x) {
+    return std::hypot(std::hypot(x[0] - 4, x[1]) - 1, x[2]) - 0.3;
+  };
+  const auto box_f = [](const Vec3& x) {  // distance to the inner box [7.3, 8.7] × [−0.7, 0.7]² minus 0.3
+    const double dx = std::max(std::abs(x[0] - 8) - 0.7, 0.0), dy = std::max(std::abs(x[1]) - 0.7, 0.0),
+                 dz = std::max(std::abs(x[2]) - 0.7, 0.0);
+    const double outside = std::sqrt(dx * dx + dy * dy + dz * dz);
+    const double inside = std::min(0.0, std::max({std::abs(x[0] - 8) - 0.7, std::abs(x[1]) - 0.7, std::abs(x[2]) - 0.7}));
+    return outside + inside - 0.3;
+  };
+  const std::function<double(const Vec3&)> fs[3] = {sphere_f, torus_f, box_f};
+  std::mt19937_64 rng(21);
+  for (int si = 0; si < 3; ++si) {
+    surface::Body body;
+    ASSERT_EQ(surface::build_brep(data, {si}, surface::Placement{}, body), "") << si;
+    EXPECT_NEAR(surface::volume(body), data.solids[static_cast<std::size_t>(si)].volume, 1e-12);
+    const Box3& b = body.box;
+    int checked = 0;
+    for (int i = 0; i < 20000; ++i) {
+      Vec3 p;
+      for (int k = 0; k < 3; ++k)
+        p[k] = b.min[k] + (b.max[k] - b.min[k]) * (static_cast<double>(rng() >> 11) * 0x1.0p-53);
+      const double f = fs[si](p);
+      if (std::abs(f) < 1e-9) continue;
+      ASSERT_EQ(surface::side(body, p), f < 0 ? 1 : -1) << "solid " << si << " at " << p[0] << " " << p[1] << " " << p[2];
+      ++checked;
+    }
+    EXPECT_GT(checked, 19000);
+    // Segments: the parity of roots agrees with the sides of their ends, and each root
+    // lies on the analytic surface.
+    std::vector<double> ts;
+    for (int i = 0; i < 3000; ++i) {
+      Vec3 a, c;
+      for (int k = 0; k < 3; ++k) {
+        a[k] = b.min[k] + (b.max[k] - b.min[k]) * (static_cast<double>(rng() >> 11) * 0x1.0p-53);
+        c[k] = b.min[k] + (b.max[k] - b.min[k]) * (static_cast<double>(rng() >> 11) * 0x1.0p-53);
+      }
+      const double fa = fs[si](a), fc = fs[si](c);
+      if (std::abs(fa) < 1e-6 || std::abs(fc) < 1e-6) continue;
+      ts.clear();
+      surface::segment_roots(body, a, c, ts);
+      for (double t : ts) {
+        const Vec3 x{a[0] + t * (c[0] - a[0]), a[1] + t * (c[1] - a[1]), a[2] + t * (c[2] - a[2])};
+        EXPECT_LE(std::abs(fs[si](x)), 1e-9) << "solid " << si;
+      }
+      if (ts.size() % 2 != static_cast<std::size_t>((fa < 0) != (fc < 0))) {
+        // A tangency can give a double root: only a mismatch far from tangency is wrong.
+        ADD_FAILURE() << "solid " << si << ": " << ts.size() << " roots, ends " << fa << " " << fc;
+      }
+    }
+  }
+  // All three as one body, placed: scale 0.1, translated.
+  surface::Body all;
+  surface::Placement pl;
+  pl.scale = 0.1;
+  pl.translate = {0.1, 0.5, 0.5};
+  ASSERT_EQ(surface::build_brep(data, {}, pl, all), "");
+  EXPECT_NEAR(surface::volume(all), 1e-3 * (data.solids[0].volume + data.solids[1].volume + data.solids[2].volume), 1e-14);
+  EXPECT_EQ(surface::side(all, {0.1, 0.5, 0.5}), 1);                // the sphere's centre
+  EXPECT_EQ(surface::side(all, {0.1 + 0.4, 0.5, 0.5}), -1);         // the torus's hole
+  EXPECT_EQ(surface::side(all, {0.1 + 0.4 + 0.1, 0.5, 0.5}), 1);    // in its tube
+  EXPECT_EQ(surface::side(all, {0.1 + 0.8, 0.5 + 0.099, 0.5}), 1);  // the box, near a face
 }
 
 TEST(StepImport, WithoutOcctRefuses) {
