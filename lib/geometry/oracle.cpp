@@ -21,20 +21,6 @@
 namespace cisamr::geometry {
 namespace {
 
-// Distance from p to the closed box (the 2D form rounds through hypot, kept as it was).
-double box_distance(const Box2& b, const Vec2& p) {
-  const double dx = std::max({b.min[0] - p[0], 0.0, p[0] - b.max[0]});
-  const double dy = std::max({b.min[1] - p[1], 0.0, p[1] - b.max[1]});
-  return std::hypot(dx, dy);
-}
-double box_distance(const Box3& b, const Vec3& p) {
-  double d2 = 0;
-  for (int k = 0; k < 3; ++k) {
-    const double e = std::max({b.min[k] - p[k], 0.0, p[k] - b.max[k]});
-    d2 += e * e;
-  }
-  return std::sqrt(d2);
-}
 
 double point_distance(const Vec2& q, const Vec2& p) { return std::hypot(q[0] - p[0], q[1] - p[1]); }
 double point_distance(const Vec3& q, const Vec3& p) { return norm(sub(q, p)); }

@@ -33,6 +33,22 @@ bool point_in_box(const std::type_identity_t<Vec<Dim>>& p, const Box<Dim>& b) {
   return true;
 }
 
+// Distance from p to the closed box (the 2D form rounds through hypot, kept as it was:
+// node positions depend on it bit for bit).
+inline double box_distance(const Box2& b, const Vec2& p) {
+  const double dx = std::max({b.min[0] - p[0], 0.0, p[0] - b.max[0]});
+  const double dy = std::max({b.min[1] - p[1], 0.0, p[1] - b.max[1]});
+  return std::hypot(dx, dy);
+}
+inline double box_distance(const Box3& b, const Vec3& p) {
+  double d2 = 0;
+  for (int k = 0; k < 3; ++k) {
+    const double e = std::max({b.min[k] - p[k], 0.0, p[k] - b.max[k]});
+    d2 += e * e;
+  }
+  return std::sqrt(d2);
+}
+
 // Length of the box diagonal (the scale of tolerances relative to a shape).
 inline double box_diagonal(const Box2& b) { return std::hypot(b.max[0] - b.min[0], b.max[1] - b.min[1]); }
 inline double box_diagonal(const Box3& b) { return norm(sub(b.max, b.min)); }

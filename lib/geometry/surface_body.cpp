@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstring>
 #include <limits>
+#include <initializer_list>
 #include <map>
 #include <mutex>
 #include <numeric>
@@ -145,6 +146,29 @@ double max_abs(const Box3& b) {
   double m = 0;
   for (int k = 0; k < 3; ++k) m = std::max({m, std::abs(b.min[k]), std::abs(b.max[k])});
   return m;
+}
+
+// Fits a cell's shell: the box of the restricted piece's control points and `points` (its
+// triangles' corners), and the slab of both along the normal (the given one; where it is
+// zero, the piece's at its centre), widened by `widen`, rounding and τ.
+void fit_shell(Cell& c, const nurbs::BezierPatch& sub_piece, std::initializer_list<const Vec3*> points, double widen,
+               double tolerance) {
+  if (c.normal == Vec3{0, 0, 0}) {
+    Vec3 ds, dt;
+    nurbs::evaluate(sub_piece, 0.5, 0.5, &ds, &dt);
+    c.normal = unit(cross(ds, dt));
+    if (c.normal == Vec3{0, 0, 0}) c.normal = {1, 0, 0};
+  }
+  c.box = nurbs::control_box(sub_piece);
+  const std::array<double, 2> slab = nurbs::slab(sub_piece, c.normal);
+  c.lo = slab[0], c.hi = slab[1];
+  for (const Vec3* p : points) {
+    grow(c.box, *p);
+    c.lo = std::min(c.lo, dot(c.normal, *p)), c.hi = std::max(c.hi, dot(c.normal, *p));
+  }
+  const double w = widen + 8 * kUnit * max_abs(c.box) + tolerance;
+  for (int d = 0; d < 3; ++d) c.box.min[d] -= w, c.box.max[d] += w;
+  c.lo -= w, c.hi += w;
 }
 
 // Samples per Bézier span in one direction so that a cell deviates from its chords by
@@ -479,22 +503,7 @@ std::string build(const NurbsSurface& surface, Body& body) {
         const Vec3 &p0 = vertices[static_cast<std::size_t>(v[0])], &p1 = vertices[static_cast<std::size_t>(v[1])],
                    &p2 = vertices[static_cast<std::size_t>(v[2])], &p3 = vertices[static_cast<std::size_t>(v[3])];
         c.normal = unit(cross(sub(p2, p0), sub(p3, p1)));
-        if (c.normal == Vec3{0, 0, 0}) {
-          Vec3 ds, dt;
-          nurbs::evaluate(sub_piece, 0.5, 0.5, &ds, &dt);
-          c.normal = unit(cross(ds, dt));
-          if (c.normal == Vec3{0, 0, 0}) c.normal = {1, 0, 0};
-        }
-        c.box = nurbs::control_box(sub_piece);
-        const std::array<double, 2> slab = nurbs::slab(sub_piece, c.normal);
-        c.lo = slab[0], c.hi = slab[1];
-        for (const Vec3* p : {&p0, &p1, &p2, &p3}) {
-          grow(c.box, *p);
-          c.lo = std::min(c.lo, dot(c.normal, *p)), c.hi = std::max(c.hi, dot(c.normal, *p));
-        }
-        const double w = widen + 8 * kUnit * max_abs(c.box) + body.tolerance;
-        for (int d = 0; d < 3; ++d) c.box.min[d] -= w, c.box.max[d] += w;
-        c.lo -= w, c.hi += w;
+        fit_shell(c, sub_piece, {&p0, &p1, &p2, &p3}, widen, body.tolerance);
         body.max_thickness = std::max(body.max_thickness, c.hi - c.lo);
         const auto cell_id = static_cast<std::int32_t>(body.cells.size());
         body.cells.push_back(c);
@@ -697,22 +706,12 @@ std::string build_brep(const BrepData& data, const std::vector<int>& solids, con
       c.t0 = std::clamp((va - piece.v0) / hv, 0.0, 1.0), c.t1 = std::clamp((vb - piece.v0) / hv, 0.0, 1.0);
       c.outward = patch_outward[static_cast<std::size_t>(k)];
       const nurbs::BezierPatch sub_piece = nurbs::restrict_patch(piece, c.s0, c.s1, c.t0, c.t1);
-      if (tri) {
-        c.normal = unit(cross(sub(tri[1], tri[0]), sub(tri[2], tri[0])));
-      } else {
-        Vec3 ds, dt;
-        nurbs::evaluate(sub_piece, 0.5, 0.5, &ds, &dt);
-        c.normal = unit(cross(ds, dt));
-      }
-      if (c.normal == Vec3{0, 0, 0}) c.normal = {1, 0, 0};
-      c.box = nurbs::control_box(sub_piece);
-      const std::array<double, 2> sl = nurbs::slab(sub_piece, c.normal);
-      c.lo = sl[0], c.hi = sl[1];
+      // Widened below, once the triangle's gap to its face is known.
+      if (tri) c.normal = unit(cross(sub(tri[1], tri[0]), sub(tri[2], tri[0])));
       if (tri)
-        for (int i = 0; i < 3; ++i) {
-          grow(c.box, tri[i]);
-          c.lo = std::min(c.lo, dot(c.normal, tri[i])), c.hi = std::max(c.hi, dot(c.normal, tri[i]));
-        }
+        fit_shell(c, sub_piece, {&tri[0], &tri[1], &tri[2]}, 0, 0);
+      else
+        fit_shell(c, sub_piece, {}, 0, 0);
       body.cells.push_back(c);
       body.cell_pieces.push_back(sub_piece);
     }
@@ -1074,14 +1073,6 @@ double box_distance_boxes(const Box3& a, const Box3& b) {
   return std::sqrt(d2);
 }
 
-double box_distance(const Box3& b, const Vec3& p) {
-  double d2 = 0;
-  for (int k = 0; k < 3; ++k) {
-    const double e = std::max({b.min[k] - p[k], 0.0, p[k] - b.max[k]});
-    d2 += e * e;
-  }
-  return std::sqrt(d2);
-}
 
 // The point of the piece nearest to p, by Gauss–Newton from the best of a 5 × 5 sample,
 // kept in [0, 1]².
