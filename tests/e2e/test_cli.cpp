@@ -47,8 +47,64 @@ struct BadScene {
   const char* field;  // must appear in the message
 };
 
+// nurbs_surface scenes (issue #14): data/shapes/nurbs_sphere.json's patch (the exact unit
+// sphere, 5 rows of 9 points, u around z fastest), and a 3D scene holding one nurbs_surface
+// inclusion of the given patches placed at the centre of [0, 4]³ (plus `extra` keys).
+nlohmann::json nurbs_sphere_patch() {
+  std::ifstream in(std::string(CISAMR_SOURCE_DIR) + "/data/shapes/nurbs_sphere.json");
+  return nlohmann::json::parse(in).at("patches").at(0);
+}
+std::string nurbs_scene(const nlohmann::json& patches, const nlohmann::json& extra = nlohmann::json::object()) {
+  nlohmann::json inc = {{"shape", "nurbs_surface"}, {"phase", 2}, {"scale", 1}, {"translate", {2, 2, 2}}};
+  inc.update(extra);
+  inc["patches"] = patches;
+  return R"({"format": "cisamr-scene/1", "dimension": 3, "domain": {"min": [0, 0, 0], "max": [4, 4, 4]},
+    "mesh": {"h": 0.5, "levels": 0}, "phases": [{"id": 1, "name": "matrix"}, {"id": 2, "name": "particle"}],
+    "inclusions": [)" + inc.dump() + "]}";
+}
+// The bad nurbs_surface scenes of the table.
+struct NurbsBadScenes {
+  std::string half, overlapping, extra_row, short_row, zero_weight, rotation, collapsed, collapsed_patch;
+};
+NurbsBadScenes nurbs_bad_scenes() {
+  const nlohmann::json sphere = nurbs_sphere_patch();
+  NurbsBadScenes b;
+  // Open: the half u in [0, 0.5] (the first 5 of 9 columns), its sides u = 0 and u = 1
+  // matching nothing.
+  nlohmann::json half = sphere;
+  half["knots_u"] = {0, 0, 0, 0.5, 0.5, 1, 1, 1};
+  for (const char* key : {"control_points", "weights"})
+    for (auto& row : half[key]) row.erase(row.begin() + 5, row.end());
+  b.half = nurbs_scene(nlohmann::json::array({half}));
+  // Two spheres of radius 1 half a radius apart, in one entry.
+  nlohmann::json shifted = sphere;
+  for (auto& row : shifted["control_points"])
+    for (auto& p : row) p[0] = p[0].get<double>() + 0.5;
+  b.overlapping = nurbs_scene(nlohmann::json::array({sphere, shifted}));
+  // 6 rows where the knots ask for 5, and a row of 8 points where they ask for 9.
+  nlohmann::json extra_row = sphere;
+  extra_row["control_points"].push_back(extra_row["control_points"][4]);
+  b.extra_row = nurbs_scene(nlohmann::json::array({extra_row}));
+  nlohmann::json short_row = sphere;
+  short_row["control_points"][2].erase(short_row["control_points"][2].begin() + 8);
+  b.short_row = nurbs_scene(nlohmann::json::array({short_row}));
+  nlohmann::json zero_weight = sphere;
+  zero_weight["weights"][1][1] = 0;
+  b.zero_weight = nurbs_scene(nlohmann::json::array({zero_weight}));
+  b.rotation = nurbs_scene(nlohmann::json::array({sphere}), {{"rotation", {{1, 0, 0}, {0, 1, 0.2}, {0, 0, 1}}}});
+  // Every control point at one place: alone (the body has no size), and next to the sphere
+  // (that patch's boundary is four poles).
+  nlohmann::json collapsed = sphere;
+  for (auto& row : collapsed["control_points"])
+    for (auto& p : row) p = {0.25, 0.25, 0.25};
+  b.collapsed = nurbs_scene(nlohmann::json::array({collapsed}));
+  b.collapsed_patch = nurbs_scene(nlohmann::json::array({sphere, collapsed}));
+  return b;
+}
+
 TEST_F(Cli, MalformedScenesExitWithCode2NamingFileAndFieldAndLeaveNoOutput) {
   const std::string h = kHeader;
+  const NurbsBadScenes nurbs = nurbs_bad_scenes();
   const BadScene cases[] = {
       {"bad-json", "{\"format\": \"cisamr-scene/1\", \"dimension\": 2,,}", "line"},
       {"missing-field", R"({"format": "cisamr-scene/1", "dimension": 2, "mesh": {"h": 1}})", "domain"},
@@ -86,6 +142,18 @@ TEST_F(Cli, MalformedScenesExitWithCode2NamingFileAndFieldAndLeaveNoOutput) {
       {"periodic-3d-odd-cells", R"({"format": "cisamr-scene/1", "dimension": 3,
         "domain": {"min": [0, 0, 0], "max": [5, 4, 4], "periodic": true}, "mesh": {"h": 1}, "inclusions": []})",
        "even number, at least 4"},
+      // nurbs_surface inclusions (issue #14): the body's checks and the reader's.
+      {"nurbs-open-half-sphere", nurbs.half, "inclusions[0].patches[0].u_max: meets no other patch boundary"},
+      {"nurbs-overlapping-spheres", nurbs.overlapping, "inclusions[0].patches: patches[0] and patches[1] intersect"},
+      {"nurbs-extra-row", nurbs.extra_row,
+       "inclusions[0].patches[0].control_points: expected 5 rows of 9 points (from the knots), got 6 rows"},
+      {"nurbs-short-row", nurbs.short_row,
+       "inclusions[0].patches[0].control_points[2]: expected a row of 9 points (from the knots), got 8"},
+      {"nurbs-zero-weight", nurbs.zero_weight, "inclusions[0].patches[0].weights[1][1]: must be positive"},
+      {"nurbs-bad-rotation", nurbs.rotation, "inclusions[0].rotation: not an orthonormal matrix"},
+      {"nurbs-collapsed", nurbs.collapsed, "inclusions[0].patches: all control points coincide"},
+      {"nurbs-collapsed-patch", nurbs.collapsed_patch,
+       "inclusions[0].patches[1]: all control points of its boundary coincide"},
   };
   for (const BadScene& c : cases) {
     SCOPED_TRACE(c.name);
