@@ -228,12 +228,12 @@ TEST_F(Cli, MeshesEveryFormatAndCertifies) {
 
 // 3D: the first version of the mesher runs from the command line; it is conforming, and
 // the exit status reports tetrahedra above the bound of 5 (3) until face swapping lands.
-// The shipped 3D examples (spheres, an ellipsoid and a fibre; STL shapes; NURBS surfaces): every
+// The shipped 3D examples (spheres, an ellipsoid and a fibre; STL shapes; NURBS surfaces; STEP solids): every
 // tetrahedron within the bound (exit 0), a report with the guard's figures, a file that
 // certify passes with the scene (fidelity within the reported collapse deviation), and the
 // same mesh (checksum) from the parallel mesher on one process with two partitions.
 TEST_F(Cli, Meshes3DScenesWithinTheBound) {
-  for (const std::string name : {"spheres3d", "stl3d", "nurbs3d"}) {
+  for (const std::string name : {"spheres3d", "stl3d", "nurbs3d", "step3d"}) {
     SCOPED_TRACE(name);
     const std::string scene = std::string(CISAMR_SOURCE_DIR) + "/data/examples/" + name + ".json";
     const std::string out = (dir / (name + ".vtu")).string();
