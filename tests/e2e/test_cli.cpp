@@ -54,6 +54,14 @@ nlohmann::json nurbs_sphere_patch() {
   std::ifstream in(std::string(CISAMR_SOURCE_DIR) + "/data/shapes/nurbs_sphere.json");
   return nlohmann::json::parse(in).at("patches").at(0);
 }
+// A 3D scene with one `step` inclusion of `file`.
+std::string step_scene(const std::string& file) {
+  nlohmann::json scene = {{"format", "cisamr-scene/1"}, {"dimension", 3},
+                          {"domain", {{"min", {0, 0, 0}}, {"max", {4, 4, 4}}}}, {"mesh", {{"h", 0.5}, {"levels", 1}}},
+                          {"phases", {{{"id", 1}, {"name", "matrix"}}, {{"id", 2}, {"name", "particle"}}}}};
+  scene["inclusions"] = {{{"shape", "step"}, {"file", file}, {"phase", 2}}};
+  return scene.dump();
+}
 std::string nurbs_scene(const nlohmann::json& patches, const nlohmann::json& extra = nlohmann::json::object()) {
   nlohmann::json inc = {{"shape", "nurbs_surface"}, {"phase", 2}, {"scale", 1}, {"translate", {2, 2, 2}}};
   inc.update(extra);
@@ -154,6 +162,14 @@ TEST_F(Cli, MalformedScenesExitWithCode2NamingFileAndFieldAndLeaveNoOutput) {
       {"nurbs-collapsed", nurbs.collapsed, "inclusions[0].patches: all control points coincide"},
       {"nurbs-collapsed-patch", nurbs.collapsed_patch,
        "inclusions[0].patches[1]: all control points of its boundary coincide"},
+      // STEP files (issue #14), named by absolute path so that nothing but the scene is in
+      // the test directory: not STEP (a Python script), one free face, no such file.
+      {"step-not-step", step_scene(std::string(CISAMR_SOURCE_DIR) + "/data/shapes/make_nurbs.py"),
+       "inclusions[0].file: make_nurbs.py: "},
+      {"step-open-shell", step_scene(std::string(CISAMR_SOURCE_DIR) + "/data/shapes/open_shell.step"),
+       "inclusions[0].file: open_shell.step: "},
+      {"step-missing", step_scene(std::string(CISAMR_SOURCE_DIR) + "/data/shapes/nowhere.step"),
+       "inclusions[0].file: "},
   };
   for (const BadScene& c : cases) {
     SCOPED_TRACE(c.name);
