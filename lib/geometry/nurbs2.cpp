@@ -37,17 +37,20 @@ Box2 inflate(const Box2& b, double e) { return {{b.min[0] - e, b.min[1] - e}, {b
 bool in_box(const Vec2& p, const Box2& b) {
   return p[0] >= b.min[0] && p[0] <= b.max[0] && p[1] >= b.min[1] && p[1] <= b.max[1];
 }
-double diag(const Box2& b) { return std::hypot(b.max[0] - b.min[0], b.max[1] - b.min[1]); }
+// sqrt of the sum of squares: std::hypot's overflow guard costs a third of the subdivision
+// time, and coordinates here are far from overflow.
+double norm2d(double dx, double dy) { return std::sqrt(dx * dx + dy * dy); }
+double diag(const Box2& b) { return norm2d(b.max[0] - b.min[0], b.max[1] - b.min[1]); }
 
 // Largest distance of a control point from the chord (control polygon flatness).
 double flatness(const double* h, int p) {
   const Vec2 u = cart(h), v = cart(h + 3 * p);
-  const double dx = v[0] - u[0], dy = v[1] - u[1], len = std::hypot(dx, dy);
+  const double dx = v[0] - u[0], dy = v[1] - u[1], len = norm2d(dx, dy);
   double f = 0;
   for (int i = 1; i < p; ++i) {
     const Vec2 q = cart(h + 3 * i);
     f = std::max(f, len > 0 ? std::abs((q[0] - u[0]) * dy - (q[1] - u[1]) * dx) / len
-                            : std::hypot(q[0] - u[0], q[1] - u[1]));
+                            : norm2d(q[0] - u[0], q[1] - u[1]));
   }
   return f;
 }
@@ -112,22 +115,22 @@ void piece_distance(const Region& r, const double* h, const Vec2& p, int depth, 
   const Box2 bx = control_box(h, deg);
   const double dx = std::max({bx.min[0] - p[0], 0.0, p[0] - bx.max[0]});
   const double dy = std::max({bx.min[1] - p[1], 0.0, p[1] - bx.max[1]});
-  if (std::hypot(dx, dy) >= best) return;
+  if (norm2d(dx, dy) >= best) return;
   const Vec2 u = cart(h), v = cart(h + 3 * deg);
   if (flatness(h, deg) <= 1e-14 * r.size || depth > 80) {
     const double ex = v[0] - u[0], ey = v[1] - u[1], ee = ex * ex + ey * ey;
     double t = ee > 0 ? ((p[0] - u[0]) * ex + (p[1] - u[1]) * ey) / ee : 0;
     t = std::clamp(t, 0.0, 1.0);
-    best = std::min(best, std::hypot(p[0] - u[0] - t * ex, p[1] - u[1] - t * ey));
+    best = std::min(best, norm2d(p[0] - u[0] - t * ex, p[1] - u[1] - t * ey));
     return;
   }
-  best = std::min({best, std::hypot(p[0] - u[0], p[1] - u[1]), std::hypot(p[0] - v[0], p[1] - v[1])});
+  best = std::min({best, norm2d(p[0] - u[0], p[1] - u[1]), norm2d(p[0] - v[0], p[1] - v[1])});
   double left[kMaxHom], right[kMaxHom];
   split_half<3>(h, deg, left, right);
   // Nearer half first: better pruning.
   const Vec2 m = cart(left + 3 * deg);
-  const bool left_first = std::hypot(p[0] - u[0], p[1] - u[1]) + std::hypot(p[0] - m[0], p[1] - m[1]) <=
-                          std::hypot(p[0] - v[0], p[1] - v[1]) + std::hypot(p[0] - m[0], p[1] - m[1]);
+  const bool left_first = norm2d(p[0] - u[0], p[1] - u[1]) + norm2d(p[0] - m[0], p[1] - m[1]) <=
+                          norm2d(p[0] - v[0], p[1] - v[1]) + norm2d(p[0] - m[0], p[1] - m[1]);
   piece_distance(r, left_first ? left : right, p, depth + 1, best);
   piece_distance(r, left_first ? right : left, p, depth + 1, best);
 }
@@ -329,6 +332,42 @@ void x_breakpoints(const Region& r, std::vector<double>& xs) {
       dx_prev = d[0];
     }
   }
+}
+
+// Branch and bound: a piece whose control box lies in the box found so far adds nothing
+// (the curve stays in its control polygon's hull); others split until their control box
+// is within tol, then join whole. Contains the curve, at most tol larger; a few dozen
+// splits per extremum where flattening to tol would take ~1/sqrt(tol) points.
+Box2 tight_box(const Region& r, double tol) {
+  Box2 b{r.pieces.front().start, r.pieces.front().start};
+  auto join = [&b](const Box2& c) {
+    for (int d = 0; d < 2; ++d) b.min[d] = std::min(b.min[d], c.min[d]), b.max[d] = std::max(b.max[d], c.max[d]);
+  };
+  for (const Piece& pc : r.pieces) join({pc.start, pc.start}), join({pc.end, pc.end});
+  const int n = 3 * (r.degree + 1);
+  std::vector<double> stack;
+  for (const Piece& pc : r.pieces) stack.insert(stack.end(), pc.hom.begin(), pc.hom.end());
+  std::vector<int> depth(r.pieces.size(), 0);
+  while (!depth.empty()) {
+    double h[kMaxHom];
+    std::copy(stack.end() - n, stack.end(), h);
+    stack.resize(stack.size() - static_cast<std::size_t>(n));
+    const int level = depth.back();
+    depth.pop_back();
+    const Box2 c = control_box(h, r.degree);
+    if (in_box(c.min, b) && in_box(c.max, b)) continue;
+    if (diag(c) <= tol || level > 80) {
+      join(c);
+      continue;
+    }
+    double left[kMaxHom], right[kMaxHom];
+    split_half<3>(h, r.degree, left, right);
+    const Vec2 mid = cart(right);
+    join({mid, mid});
+    stack.insert(stack.end(), left, left + n), depth.push_back(level + 1);
+    stack.insert(stack.end(), right, right + n), depth.push_back(level + 1);
+  }
+  return b;
 }
 
 std::vector<Vec2> flatten(const Region& r, double tol) {

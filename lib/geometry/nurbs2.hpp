@@ -53,5 +53,7 @@ void x_breakpoints(const Region& r, std::vector<double>& xs);
 
 // Polyline through the curve with chord error ≤ tol (closed, first point not repeated).
 std::vector<Vec2> flatten(const Region& r, double tol);
+// The curve's box, containing it and at most tol larger on each side.
+Box2 tight_box(const Region& r, double tol);
 
 }  // namespace cisamr::geometry::nurbs
