@@ -8,6 +8,7 @@
 #include <filesystem>
 
 #include "parallel/collective.hpp"
+#include "parallel/exchange.hpp"
 #include "parallel/output.hpp"
 #include "parallel/session.hpp"
 #include "quality/quality.hpp"
@@ -31,13 +32,18 @@ std::vector<int> partition_counts() {
   }
 }
 
+// Rank 0's value on every rank (the sequential references are meshed on rank 0 only: the
+// other ranks would repeat the same work on the same cores).
+std::uint64_t from_root(std::uint64_t v) { return allreduce_sum_u64(comm(), root() ? v : 0); }
+
 void expect_invariant(const geometry::SceneDesc& scene, int partitions, bool strict) {
   SCOPED_TRACE(std::to_string(comm().size()) + " ranks, " + std::to_string(partitions) + " partitions");
-  const testing::RunOutcome seq = testing::run_sequential(scene);
+  const testing::RunOutcome seq = root() ? testing::run_sequential(scene) : testing::RunOutcome{};
+  const bool seq_failed = from_root(seq.failed ? 1 : 0) != 0;
   const testing::RunOutcome par = testing::run_parallel(comm(), scene, partitions);
-  EXPECT_EQ(seq.failed, par.failed) << seq.error << " | " << par.error;
-  if (seq.failed || par.failed) return;  // both agreed collectively: safe on every rank
-  EXPECT_EQ(par.checksum, seq.checksum);  // every rank holds the global checksum
+  EXPECT_EQ(seq_failed, par.failed) << seq.error << " | " << par.error;
+  if (seq_failed || par.failed) return;  // both agreed collectively: safe on every rank
+  EXPECT_EQ(par.checksum, from_root(seq.checksum));  // every rank holds the global checksum
   // Each rank meshed a block of consecutive partitions.
   for (int p : std::vector<int>(par.distributed.piece.mesh.cell_partition.begin(),
                                 par.distributed.piece.mesh.cell_partition.end()))
@@ -92,11 +98,12 @@ TEST(MpiInvariance, CohesiveScenes) {
   for (const geometry::SceneDesc& scene : scenes)
     for (int n : partition_counts()) {
       SCOPED_TRACE(scene.source + ", " + std::to_string(comm().size()) + " ranks, " + std::to_string(n) + " partitions");
-      const testing::RunOutcome seq = testing::run_sequential(scene, options);
+      const testing::RunOutcome seq = root() ? testing::run_sequential(scene, options) : testing::RunOutcome{};
+      const bool seq_failed = from_root(seq.failed ? 1 : 0) != 0;
       const testing::RunOutcome par = testing::run_parallel(comm(), scene, n, GhostRule{}, options);
-      EXPECT_EQ(seq.failed, par.failed) << seq.error << " | " << par.error;
-      if (seq.failed || par.failed) continue;
-      EXPECT_EQ(par.checksum, seq.checksum);
+      EXPECT_EQ(seq_failed, par.failed) << seq.error << " | " << par.error;
+      if (seq_failed || par.failed) continue;
+      EXPECT_EQ(par.checksum, from_root(seq.checksum));
       if (!root()) continue;
       EXPECT_EQ(par.mesh.node_count(), seq.mesh.node_count());
       EXPECT_EQ(par.mesh.cohesive.count(), seq.mesh.cohesive.count());
