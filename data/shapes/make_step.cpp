@@ -4,6 +4,13 @@
 //   filleted_box.step  the box [-1, 1]³ with every one of its 12 edges filleted, r = 0.3
 //   parts.step         the three as three solids of one file: sphere at (0, 0, 0), torus at
 //                      (4, 0, 0), box centred at (8, 0, 0)
+//   trimmed.step       three solids whose faces are genuinely trimmed: the slab
+//                      [-1, 1]² × [-0.5, 0.5] with a through hole of radius 0.5 about z (two
+//                      planar faces with a circular inner loop, a cylinder face inside) at the
+//                      origin; the cylinder of radius 0.5, |z| ≤ 0.5 (planar faces bounded by a
+//                      circle) about (4, 0, z); the unit sphere at (8, 0, 0) cut by the plane
+//                      n·(p − c) = 0.4, n = (1, 1, 1)/√3 (a spherical face trimmed by a circle
+//                      that is no parameter line, and a planar disc)
 //   open_shell.step    one planar face [0, 1]² (z = 0), no solid: an error case
 //   open_solid.step    a solid whose shell is the box [0, 1]³ without its top face (free
 //                      edges): an error case
@@ -15,7 +22,10 @@
 #include <BRepBuilderAPI_MakeFace.hxx>
 #include <BRepBuilderAPI_Transform.hxx>
 #include <BRepFilletAPI_MakeFillet.hxx>
+#include <BRepAlgoAPI_Cut.hxx>
 #include <BRepPrimAPI_MakeBox.hxx>
+#include <BRepPrimAPI_MakeCylinder.hxx>
+#include <BRepPrimAPI_MakeHalfSpace.hxx>
 #include <BRepPrimAPI_MakeSphere.hxx>
 #include <BRepPrimAPI_MakeTorus.hxx>
 #include <BRep_Builder.hxx>
@@ -54,6 +64,26 @@ TopoDS_Shape filleted_box() {
   fillet.Build();
   if (!fillet.IsDone()) throw Standard_Failure("fillet failed");
   return fillet.Shape();
+}
+
+TopoDS_Shape cut(const TopoDS_Shape& a, const TopoDS_Shape& b) {
+  BRepAlgoAPI_Cut op(a, b);
+  if (!op.IsDone()) throw Standard_Failure("boolean cut failed");
+  return op.Shape();
+}
+
+TopoDS_Shape cylinder(double r, double z0, double height) {
+  return BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(0, 0, z0), gp::DZ()), r, height).Shape();
+}
+
+TopoDS_Shape holed_slab() { return cut(BRepPrimAPI_MakeBox(gp_Pnt(-1, -1, -0.5), 2.0, 2.0, 1.0).Shape(), cylinder(0.5, -1.0, 2.0)); }
+
+TopoDS_Shape cut_sphere() {
+  const gp_Dir n(1, 1, 1);
+  const gp_Pnt on(0.4 * n.X(), 0.4 * n.Y(), 0.4 * n.Z());
+  const TopoDS_Face plane = BRepBuilderAPI_MakeFace(gp_Pln(on, n)).Face();
+  const TopoDS_Shape beyond = BRepPrimAPI_MakeHalfSpace(plane, gp_Pnt(2 * n.X(), 2 * n.Y(), 2 * n.Z())).Solid();
+  return cut(sphere(), beyond);
 }
 
 TopoDS_Shape moved(const TopoDS_Shape& s, double x) {
@@ -98,6 +128,7 @@ int main() {
     bool ok = write("sphere.step", {s}) && write("torus.step", {t}) && write("filleted_box.step", {b}) &&
               write("parts.step", {s, moved(t, 4.0), moved(b, 8.0)});
     const TopoDS_Face face = BRepBuilderAPI_MakeFace(gp_Pln(gp::XOY()), 0.0, 1.0, 0.0, 1.0).Face();
+    ok = ok && write("trimmed.step", {holed_slab(), moved(cylinder(0.5, -0.5, 1.0), 4.0), moved(cut_sphere(), 8.0)});
     ok = ok && write("open_shell.step", {face}) && write("open_solid.step", {open_solid()});
     if (!ok) {
       std::fprintf(stderr, "make_step: a STEP transfer or write failed\n");
@@ -107,6 +138,6 @@ int main() {
     std::fprintf(stderr, "make_step: %s\n", e.GetMessageString());
     return 1;
   }
-  std::printf("wrote sphere.step torus.step filleted_box.step parts.step open_shell.step open_solid.step\n");
+  std::printf("wrote sphere.step torus.step filleted_box.step parts.step trimmed.step open_shell.step open_solid.step\n");
   return 0;
 }

@@ -595,19 +595,70 @@ Vec3 place_point(const Placement& pl, const Vec3& v) {
 }
 
 // A trimming curve as a polyline in (u, v): each Bézier span at 32 points.
-void polygonize(const BrepCurve2& c, std::vector<Vec2>& out) {
+// The curve's points at a chord error within tol (a span's control polygon, within tol of
+// its chord, holds the span): the start of every chord, the curve's end left to the next.
+void polygonize_span(const std::vector<double>& h, int p, double tol, int depth, std::vector<Vec2>& out) {
+  const Vec2 a{h[0] / h[2], h[1] / h[2]};
+  const Vec2 b{h[3 * static_cast<std::size_t>(p)] / h[3 * static_cast<std::size_t>(p) + 2],
+               h[3 * static_cast<std::size_t>(p) + 1] / h[3 * static_cast<std::size_t>(p) + 2]};
+  double flat = 0;
+  const double ex = b[0] - a[0], ey = b[1] - a[1], len2 = ex * ex + ey * ey;
+  for (int k = 1; k < p; ++k) {
+    const double x = h[3 * static_cast<std::size_t>(k)] / h[3 * static_cast<std::size_t>(k) + 2] - a[0];
+    const double y = h[3 * static_cast<std::size_t>(k) + 1] / h[3 * static_cast<std::size_t>(k) + 2] - a[1];
+    const double t = len2 > 0 ? std::clamp((x * ex + y * ey) / len2, 0.0, 1.0) : 0.0;
+    flat = std::max(flat, std::hypot(x - t * ex, y - t * ey));
+  }
+  if (flat <= tol || depth >= 40) {
+    out.push_back(a);
+    return;
+  }
+  std::vector<double> left(h.size()), right(h.size());
+  nurbs::split_half<3>(h.data(), p, left.data(), right.data());
+  polygonize_span(left, p, tol, depth + 1, out);
+  polygonize_span(right, p, tol, depth + 1, out);
+}
+
+void polygonize(const BrepCurve2& c, double tol, std::vector<Vec2>& out) {
   std::vector<std::array<double, 3>> hom;
   for (std::size_t i = 0; i < c.control_points.size(); ++i) {
     const double w = i < c.weights.size() ? c.weights[i] : 1.0;
     hom.push_back({w * c.control_points[i][0], w * c.control_points[i][1], w});
   }
   const nurbs::BezierPieces<3> pieces = nurbs::extract_bezier<3>(c.degree, c.knots, hom);
-  for (const std::vector<double>& h : pieces.points)
-    for (int k = 0; k < 32; ++k) {
-      double H[3], D[3];
-      nurbs::eval_hom<3>(h.data(), c.degree, k / 32.0, H, D);
-      out.push_back({H[0] / H[2], H[1] / H[2]});
+  for (const std::vector<double>& h : pieces.points) polygonize_span(h, c.degree, tol, 0, out);
+}
+
+// The bands of in_trim: about four edges per band on average.
+Body::TrimBands trim_bands(const std::vector<std::vector<Vec2>>& loops, double slack) {
+  Body::TrimBands bands;
+  if (loops.empty()) return bands;
+  double v0 = kInf, v1 = -kInf;
+  std::size_t edges = 0;
+  for (const auto& loop : loops) {
+    for (const Vec2& q : loop) v0 = std::min(v0, q[1]), v1 = std::max(v1, q[1]);
+    edges += loop.size();
+  }
+  v0 -= slack, v1 += slack;
+  const std::size_t n = std::max<std::size_t>(1, edges / 4);
+  bands.v0 = v0;
+  bands.inv_height = static_cast<double>(n) / (v1 - v0);
+  std::vector<std::vector<std::array<std::int32_t, 2>>> in_band(n);
+  const auto band_of = [&](double v) {
+    return std::min(n - 1, static_cast<std::size_t>(std::max(0.0, (v - v0) * bands.inv_height)));
+  };
+  for (std::size_t l = 0; l < loops.size(); ++l)
+    for (std::size_t i = 0, j = loops[l].size() - 1; i < loops[l].size(); j = i++) {
+      const double lo = std::min(loops[l][i][1], loops[l][j][1]) - slack, hi = std::max(loops[l][i][1], loops[l][j][1]) + slack;
+      for (std::size_t b = band_of(lo); b <= band_of(hi); ++b)
+        in_band[b].push_back({static_cast<std::int32_t>(l), static_cast<std::int32_t>(i)});
     }
+  bands.start.push_back(0);
+  for (const auto& e : in_band) {
+    bands.edges.insert(bands.edges.end(), e.begin(), e.end());
+    bands.start.push_back(static_cast<std::int32_t>(bands.edges.size()));
+  }
+  return bands;
 }
 
 // The uv boxes of a trimming curve's Bézier spans (their control points).
@@ -665,7 +716,7 @@ std::string build_brep(const BrepData& data, const std::vector<int>& solids, con
       bool rectangle = true;
       for (const auto& loop : face.loops) {
         std::vector<Vec2> poly;
-        for (const BrepCurve2& c : loop) polygonize(c, poly);
+        for (const BrepCurve2& c : loop) polygonize(c, 0.25 * slack, poly);
         for (const Vec2& q : poly)
           rectangle = rectangle && (std::abs(q[0] - u0) <= slack || std::abs(q[0] - u1) <= slack ||
                                     std::abs(q[1] - v0) <= slack || std::abs(q[1] - v1) <= slack);
@@ -673,6 +724,7 @@ std::string build_brep(const BrepData& data, const std::vector<int>& solids, con
       }
       if (rectangle) loops.clear();
       any_trimmed = any_trimmed || !loops.empty();
+      body.trim_bands.push_back(trim_bands(loops, slack));
       body.trims.push_back(std::move(loops));
       body.trim_slack.push_back(slack);
     }
@@ -844,18 +896,26 @@ bool in_trim(const Body& body, std::int32_t k, double u, double v) {
   const auto& loops = body.trims[static_cast<std::size_t>(k)];
   if (loops.empty()) return true;
   const double slack = body.trim_slack[static_cast<std::size_t>(k)];
+  const Body::TrimBands& bands = body.trim_bands[static_cast<std::size_t>(k)];
+  const double at = (v - bands.v0) * bands.inv_height;
+  const auto n = static_cast<double>(bands.start.size() - 1);
+  if (!(at >= 0 && at < n)) return false;  // beyond every loop's v range and its slack
+  const auto b = static_cast<std::size_t>(at);
   bool inside = false;
-  for (const std::vector<Vec2>& loop : loops)
-    for (std::size_t i = 0, j = loop.size() - 1; i < loop.size(); j = i++) {
-      const Vec2 &a = loop[j], &b = loop[i];
-      if ((a[1] > v) != (b[1] > v) && u < a[0] + (v - a[1]) * (b[0] - a[0]) / (b[1] - a[1])) inside = !inside;
-      // Distance to the edge a-b.
-      const double ex = b[0] - a[0], ey = b[1] - a[1];
-      const double len2 = ex * ex + ey * ey;
-      const double t = len2 > 0 ? std::clamp(((u - a[0]) * ex + (v - a[1]) * ey) / len2, 0.0, 1.0) : 0.0;
-      const double dx = u - (a[0] + t * ex), dy = v - (a[1] + t * ey);
-      if (dx * dx + dy * dy <= slack * slack) return true;
-    }
+  // A +u ray from (u, v) crosses only edges whose v range holds v, and an edge within the
+  // slack has its v range within the slack of v: both are in v's band.
+  for (std::int32_t e = bands.start[b]; e < bands.start[b + 1]; ++e) {
+    const std::vector<Vec2>& loop = loops[static_cast<std::size_t>(bands.edges[static_cast<std::size_t>(e)][0])];
+    const auto i = static_cast<std::size_t>(bands.edges[static_cast<std::size_t>(e)][1]);
+    const Vec2 &a = loop[i == 0 ? loop.size() - 1 : i - 1], &c = loop[i];
+    if ((a[1] > v) != (c[1] > v) && u < a[0] + (v - a[1]) * (c[0] - a[0]) / (c[1] - a[1])) inside = !inside;
+    // Distance to the edge a-c.
+    const double ex = c[0] - a[0], ey = c[1] - a[1];
+    const double len2 = ex * ex + ey * ey;
+    const double t = len2 > 0 ? std::clamp(((u - a[0]) * ex + (v - a[1]) * ey) / len2, 0.0, 1.0) : 0.0;
+    const double dx = u - (a[0] + t * ex), dy = v - (a[1] + t * ey);
+    if (dx * dx + dy * dy <= slack * slack) return true;
+  }
   return inside;
 }
 

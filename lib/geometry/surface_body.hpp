@@ -45,9 +45,20 @@ struct Body {
   double max_thickness = 0;  // thickest shell (hi − lo)
   // Trimmed faces (STEP): per patch, its trimming loops as closed polygons in (u, v) (empty:
   // the whole parameter rectangle), and the slack in (u, v) within which a root near a
-  // loop still counts (a root on an edge between two faces is found by both).
+  // loop still counts (a root on an edge between two faces is found by both). The polygons
+  // stay within a quarter of the slack of their curves, so a root inside the face between a
+  // chord and its arc is within the slack of the polygon.
   std::vector<std::vector<std::vector<Vec2>>> trims;
   std::vector<double> trim_slack;
+  // Per patch, the polygon edges by horizontal band of v (each edge in every band its v
+  // range, widened by the slack, meets): edges of band b are
+  // trim_edges[k][trim_band_start[k][b] .. trim_band_start[k][b + 1]) as (loop, index).
+  struct TrimBands {
+    double v0 = 0, inv_height = 0;
+    std::vector<std::int32_t> start;
+    std::vector<std::array<std::int32_t, 2>> edges;
+  };
+  std::vector<TrimBands> trim_bands;
   double exact_volume = -1;  // ≥ 0: the volume as imported (trimmed faces)
   double exact_area = -1;
 };
