@@ -96,7 +96,7 @@ Body body_of(const geometry::SceneDesc& scene, std::size_t i) {
     return b;
   }
   if (const auto* e = std::get_if<geometry::Ellipsoid>(&shape)) return Body{e->center, e->semi_axes, e->rotation};
-  throw InputError(scene.source, geometry::inclusion_field(i) + ".shape",
+  throw InputError(scene.source, geometry::inclusion_field(scene, i) + ".shape",
                    "the TetGen reference meshes spheres and ellipsoids only");
 }
 
@@ -116,7 +116,7 @@ void check_scene(const geometry::SceneDesc& scene, const std::vector<Body>& bodi
     for (int d = 0; d < 3; ++d)
       if (b.center[d] - b.bounding_radius() <= scene.domain_min[d] ||
           b.center[d] + b.bounding_radius() >= scene.domain_max[d])
-        throw InputError(scene.source, geometry::inclusion_field(i),
+        throw InputError(scene.source, geometry::inclusion_field(scene, i),
                          "the TetGen reference needs inclusions strictly inside the domain (this one may touch it)");
   }
   // Spheres: exact overlap test on a uniform grid hash of the centres. Ellipsoids that
@@ -145,8 +145,8 @@ void check_scene(const geometry::SceneDesc& scene, const std::vector<Body>& bodi
             const bool both_spheres = std::holds_alternative<geometry::Sphere>(scene.inclusions[i].shape) &&
                                       std::holds_alternative<geometry::Sphere>(scene.inclusions[j].shape);
             if (both_spheres && gap <= 0)
-              throw InputError(scene.source, geometry::inclusion_field(j),
-                               "overlaps " + geometry::inclusion_field(i) +
+              throw InputError(scene.source, geometry::inclusion_field(scene, j),
+                               "overlaps " + geometry::inclusion_field(scene, i) +
                                    ": the TetGen reference needs disjoint inclusions");
           }
         }

@@ -47,7 +47,7 @@ void check_request(const geometry::SceneDesc& scene, const Options& options) {
     std::string field = "mesh.h";
     if (estimate.background <= limit && estimate.largest_inclusion >= 0) {
       const auto k = static_cast<std::size_t>(estimate.largest_inclusion);
-      field = scene.inclusions[k].levels == scene.levels ? "mesh.levels" : geometry::inclusion_field(k) + ".levels";
+      field = scene.inclusions[k].levels == scene.levels ? "mesh.levels" : geometry::inclusion_field(scene, k) + ".levels";
     }
     const std::string limit_text =
         options.max_elements > 0 ? "the limit of " + about(limit)

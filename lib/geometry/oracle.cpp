@@ -135,7 +135,7 @@ void check_phases(const SceneDesc& scene) {
 template <int Dim>
 std::unique_ptr<DimensionModel<Dim>> checked_inclusion(const SceneDesc& scene, std::size_t i, int& phase) {
   const Inclusion& inc = scene.inclusions[i];
-  const std::string field = inclusion_field(i);
+  const std::string field = inclusion_field(scene, i);
   phase = scene.phase_index(inc.phase);
   if (phase < 0) throw InputError(scene.source, field + ".phase", "no phase has id " + std::to_string(inc.phase));
   return make_shape_model<Dim>(inc.shape, scene.source, field);

@@ -27,7 +27,7 @@ void group_overlapping_inclusions(Impl& m) {
   for (auto [i, j] : pairs) {
     if (m.items[i].phase != m.items[j].phase) {
       if (m.regions_intersect(i, j, true))
-        throw InputError(m.scene.source, inclusion_field(m.scene.listed(static_cast<std::size_t>(j))),
+        throw InputError(m.scene.source, inclusion_field(m.scene, m.scene.listed(static_cast<std::size_t>(j))),
                          (m.scene.listed(static_cast<std::size_t>(j)) == static_cast<std::size_t>(j)
                               ? std::string("overlaps ")
                               : inclusion_name(m.scene, static_cast<std::size_t>(j)) + " overlaps ") +

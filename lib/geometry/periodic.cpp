@@ -53,7 +53,7 @@ SceneDesc expand_periodic(const SceneDesc& scene, double reach, std::span<const 
       // Wider than a few periods, an inclusion would cover the whole cell with its own
       // images many times over: refuse it rather than expand an unbounded number.
       if (hi[a] - lo[a] > kMaxImagesPerAxis)
-        throw InputError(scene.source, inclusion_field(k),
+        throw InputError(scene.source, inclusion_field(scene, k),
                          std::string("spans more than ") + std::to_string(kMaxImagesPerAxis - 2) +
                              " periods of the periodic domain along " + "xyz"[d]);
     }

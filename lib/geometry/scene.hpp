@@ -129,6 +129,14 @@ struct SceneDesc {
   bool images_expanded = false;  // set by expand_periodic (a subset of such a scene keeps it)
   std::vector<std::array<std::int8_t, 3>> image_shift;
 
+  // Where each listed inclusion came from in the scene file, when that is not simply
+  // inclusions[k]: a `step` entry of several solids is one inclusion per solid, and a subset
+  // scene (parallel/ghost.hpp) keeps its inclusions' names. entry[k] is the index in the
+  // file's `inclusions` array, entry_solid[k] the solid of that entry's STEP file (−1: the
+  // whole entry). Both empty: inclusion k is entry k.
+  std::vector<std::int32_t> entry;
+  std::vector<std::int32_t> entry_solid;
+
   bool any_periodic() const {
     for (int d = 0; d < dimension; ++d)
       if (periodic[static_cast<std::size_t>(d)]) return true;
@@ -150,18 +158,27 @@ struct SceneDesc {
 // Field path of inclusion i for error messages: "inclusions[i]".
 inline std::string inclusion_field(std::size_t i) { return "inclusions[" + std::to_string(i) + "]"; }
 
+// The field path of listed inclusion k of a scene as the file names it: "inclusions[e]", or
+// "inclusions[e] (solid s)" for one solid of a `step` entry of several.
+inline std::string inclusion_field(const SceneDesc& scene, std::size_t k) {
+  if (k >= scene.entry.size()) return inclusion_field(k);
+  std::string field = inclusion_field(static_cast<std::size_t>(scene.entry[k]));
+  if (k < scene.entry_solid.size() && scene.entry_solid[k] >= 0) field += " (solid " + std::to_string(scene.entry_solid[k]) + ")";
+  return field;
+}
+
 // The same for inclusion k of a scene with periodic images: a listed inclusion by its field,
 // an image as "the periodic image (+x-2y) of inclusions[i]".
 inline std::string inclusion_name(const SceneDesc& scene, std::size_t k) {
   const std::size_t base = scene.listed(k);
-  if (base == k) return inclusion_field(k);
+  if (base == k) return inclusion_field(scene, k);
   std::string shift;
   for (int d = 0; d < 3; ++d) {
     const int s = scene.image_shift[k][static_cast<std::size_t>(d)];
     if (s == 0) continue;  // "+x", "-2y": the shift in periods along each axis
     shift += std::string(s > 0 ? "+" : "-") + (std::abs(s) > 1 ? std::to_string(std::abs(s)) : "") + "xyz"[d];
   }
-  return "the periodic image (" + shift + ") of " + inclusion_field(base);
+  return "the periodic image (" + shift + ") of " + inclusion_field(scene, base);
 }
 
 }  // namespace cisamr::geometry

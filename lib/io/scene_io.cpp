@@ -18,6 +18,7 @@
 
 #include "core/error.hpp"
 #include "core/input_file.hpp"
+#include "geometry/brep_data.hpp"
 #include "geometry/shape_family.hpp"
 #include "geometry/shape_fields.hpp"
 #include "geometry/step_import.hpp"
@@ -650,7 +651,27 @@ SceneDesc SceneReader::scene(const json& root) const {
       inclusion.levels = s.levels;
       if (const json* l = member(object, "levels"))
         inclusion.levels = integer_in(*l, join(field, "levels"), 0, kMaxLevels);
+      // Every solid of a `step` entry is an inclusion of its own (its box, levels and
+      // partition load are its own), named "inclusions[i] (solid k)" in messages.
+      std::vector<int> solids;
+      if (const auto* step = std::get_if<StepSolids>(&inclusion.shape); step != nullptr && step->brep) {
+        solids = step->solids;
+        if (solids.empty())
+          for (std::size_t k = 0; k < step->brep->solids.size(); ++k) solids.push_back(static_cast<int>(k));
+      }
+      if (solids.size() > 1) {
+        for (int k : solids) {
+          Inclusion one = inclusion;
+          std::get<StepSolids>(one.shape).solids = {k};
+          s.inclusions.push_back(std::move(one));
+          s.entry.push_back(static_cast<std::int32_t>(i));
+          s.entry_solid.push_back(k);
+        }
+        continue;
+      }
       s.inclusions.push_back(std::move(inclusion));
+      s.entry.push_back(static_cast<std::int32_t>(i));
+      s.entry_solid.push_back(-1);
     }
   }
   return s;
@@ -866,7 +887,7 @@ std::int64_t load_stl_surfaces(SceneDesc& scene, std::span<const std::int32_t> i
       // As read_scene reports it: the scene's field for a file that cannot be opened, the
       // STL file and line for a malformed one.
       const std::string problem = stl_file_problem(s->file);
-      if (!problem.empty()) throw InputError(scene.source, "inclusions[" + std::to_string(k) + "].file", problem);
+      if (!problem.empty()) throw InputError(scene.source, inclusion_field(scene, static_cast<std::size_t>(k)) + ".file", problem);
       it = files.emplace(s->file, read_stl(s->file)).first;
       ++read;
     }

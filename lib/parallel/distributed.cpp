@@ -5,7 +5,6 @@
 #include <limits>
 #include <map>
 #include <optional>
-#include <regex>
 #include <type_traits>
 
 #include "geometry/oracle.hpp"
@@ -22,21 +21,6 @@ namespace {
 
 double seconds_since(std::chrono::steady_clock::time_point t) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
-}
-
-// The subset oracle names inclusions by their index in the subset: name them as the scene does.
-std::string rename_inclusions(const std::string& text, const std::vector<std::int32_t>& to_scene) {
-  static const std::regex pattern(R"(inclusions\[(\d+)\])");
-  std::string out;
-  auto begin = std::sregex_iterator(text.begin(), text.end(), pattern);
-  std::size_t last = 0;
-  for (auto it = begin; it != std::sregex_iterator(); ++it) {
-    const std::size_t local = std::stoul((*it)[1].str());
-    out += text.substr(last, static_cast<std::size_t>(it->position()) - last);
-    out += local < to_scene.size() ? "inclusions[" + std::to_string(to_scene[local]) + "]" : it->str();
-    last = static_cast<std::size_t>(it->position() + it->length());
-  }
-  return out + text.substr(last);
 }
 
 // The kernel phase of a rank, measured in its partitions done; the stages of the partition
@@ -386,12 +370,8 @@ DistributedMesh<Dim> mesh_distributed(const Comm& comm, geometry::SceneDesc scen
           local_index.push_back(static_cast<std::int32_t>(
               std::lower_bound(out.loaded_inclusions.begin(), out.loaded_inclusions.end(), k) -
               out.loaded_inclusions.begin()));
-        try {
-          oracle = std::make_unique<Oracle>(subset_scene(needed, local_index));
-        } catch (const InputError& e) {
-          throw InputError(e.file(), rename_inclusions(e.field(), region.inclusions),
-                           rename_inclusions(e.problem(), region.inclusions));
-        }
+        // (A subset scene names its inclusions as the scene file does.)
+        oracle = std::make_unique<Oracle>(subset_scene(needed, local_index));
       }
       const auto t0 = std::chrono::steady_clock::now();
       std::vector<int> region_levels;

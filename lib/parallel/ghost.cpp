@@ -236,7 +236,14 @@ geometry::SceneDesc subset_scene(const geometry::SceneDesc& scene, const std::ve
   out.phases = scene.phases;
   out.matrix_phase = scene.matrix_phase;
   out.inclusions.reserve(inclusions.size());
-  for (std::int32_t k : inclusions) out.inclusions.push_back(scene.inclusions[static_cast<std::size_t>(k)]);
+  // Named as in the scene file (an image by the inclusion it is an image of).
+  for (std::int32_t k : inclusions) {
+    const auto at = static_cast<std::size_t>(k);
+    out.inclusions.push_back(scene.inclusions[at]);
+    const std::size_t base = scene.listed(at);
+    out.entry.push_back(base < scene.entry.size() ? scene.entry[base] : static_cast<std::int32_t>(base));
+    out.entry_solid.push_back(base < scene.entry_solid.size() ? scene.entry_solid[base] : -1);
+  }
   return out;
 }
 

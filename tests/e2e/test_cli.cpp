@@ -170,6 +170,15 @@ TEST_F(Cli, MalformedScenesExitWithCode2NamingFileAndFieldAndLeaveNoOutput) {
        "inclusions[0].file: open_shell.step: "},
       {"step-missing", step_scene(std::string(CISAMR_SOURCE_DIR) + "/data/shapes/nowhere.step"),
        "inclusions[0].file: "},
+      // Every solid of a step entry is an inclusion, named by its entry and solid: parts.step's
+      // filleted box (solid 2) overlaps a sphere of another phase.
+      {"step-solid-overlaps", R"({"format": "cisamr-scene/1", "dimension": 3,
+        "domain": {"min": [0, 0, 0], "max": [1, 0.5, 0.5]}, "mesh": {"h": 0.05, "levels": 1},
+        "phases": [{"id": 1, "name": "matrix"}, {"id": 2, "name": "particle"}, {"id": 3, "name": "other"}],
+        "inclusions": [{"shape": "step", "file": ")" + std::string(CISAMR_SOURCE_DIR) + R"(/data/shapes/parts.step",
+                        "solids": [0, 2], "scale": 0.08, "translate": [0.18, 0.25, 0.25], "phase": 2},
+                       {"shape": "sphere", "center": [0.82, 0.25, 0.25], "radius": 0.05, "phase": 3}]})",
+       "inclusions[1]: overlaps inclusions[0] (solid 2), which has a different phase"},
   };
   for (const BadScene& c : cases) {
     SCOPED_TRACE(c.name);

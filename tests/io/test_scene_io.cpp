@@ -9,6 +9,7 @@
 
 #include "core/error.hpp"
 #include "geometry/shapes.hpp"
+#include "geometry/step_import.hpp"
 #include "io/stl_io.hpp"
 #include "support/random_nurbs3.hpp"
 #include "temp_dir.hpp"
@@ -709,6 +710,45 @@ TEST(SceneIo, NonRegularFilesAreRefusedNotRead) {
     }
     EXPECT_THROW(read_stl(file), InputError) << file;
   }
+}
+
+// A `step` entry is one inclusion per selected solid (issue #14: "every solid in the file is
+// an inclusion"), each named by its entry and solid; a scene written back lists them one by
+// one and reads back the same.
+TEST(SceneIo, StepEntriesBecomeOneInclusionPerSolid) {
+  if (!geometry::step_import_available()) GTEST_SKIP() << "built with CISAMR_WITH_OCCT=OFF";
+  TempDir dir;
+  const std::string parts = std::string(CISAMR_SOURCE_DIR) + "/data/shapes/parts.step";
+  const std::string path = dir.write("scene.json", R"({"format": "cisamr-scene/1", "dimension": 3,
+    "domain": {"min": [0, 0, 0], "max": [2, 1, 1]}, "mesh": {"h": 0.1, "levels": 1},
+    "phases": [{"id": 1, "name": "matrix"}, {"id": 2, "name": "particle"}, {"id": 3, "name": "ball"}],
+    "inclusions": [{"shape": "step", "file": ")" + parts + R"(", "scale": 0.05, "translate": [0.2, 0.5, 0.5], "phase": 2},
+                   {"shape": "sphere", "center": [1.5, 0.5, 0.5], "radius": 0.1, "phase": 3},
+                   {"shape": "step", "file": ")" + parts + R"(", "solids": [1], "scale": 0.05, "translate": [0.2, 0.2, 0.2]}]})");
+  const SceneDesc s = read_scene(path);
+  ASSERT_EQ(s.inclusions.size(), 5u);
+  const std::vector<std::vector<int>> solids = {{0}, {1}, {2}, {}, {1}};
+  for (std::size_t k = 0; k < 5; ++k) {
+    const auto* st = std::get_if<StepSolids>(&s.inclusions[k].shape);
+    ASSERT_EQ(st != nullptr, k != 3) << k;
+    if (st != nullptr) {
+      EXPECT_EQ(st->solids, solids[k]) << k;
+      EXPECT_TRUE(st->brep != nullptr);
+    }
+  }
+  EXPECT_EQ(s.inclusions[2].phase, 2);
+  EXPECT_EQ(s.entry, (std::vector<std::int32_t>{0, 0, 0, 1, 2}));
+  EXPECT_EQ(s.entry_solid, (std::vector<std::int32_t>{0, 1, 2, -1, -1}));
+  EXPECT_EQ(inclusion_field(s, 2), "inclusions[0] (solid 2)");
+  EXPECT_EQ(inclusion_field(s, 3), "inclusions[1]");
+  EXPECT_EQ(inclusion_field(s, 4), "inclusions[2]");
+  // Written back: five entries, each of one solid, read back as they are.
+  write_scene(dir.file("back.json"), s);
+  const SceneDesc back = read_scene(dir.file("back.json"));
+  ASSERT_EQ(back.inclusions.size(), 5u);
+  EXPECT_EQ(back.entry, (std::vector<std::int32_t>{0, 1, 2, 3, 4}));
+  for (std::size_t k = 0; k < 5; ++k)
+    if (const auto* st = std::get_if<StepSolids>(&back.inclusions[k].shape)) EXPECT_EQ(st->solids, solids[k]) << k;
 }
 
 }  // namespace
