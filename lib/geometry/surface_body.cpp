@@ -62,6 +62,149 @@ SideCurve side_curve(const nurbs::PatchPieces& pp, int side) {
 
 Vec3 cart(const double* h) { return {h[0] / h[3], h[1] / h[3], h[2] / h[3]}; }
 
+// ---------------------------------------------------------------- shared breakpoints
+
+// Normalised breakpoints of a patch along u (dir 0) or v (dir 1): the inner span ends
+// mapped to (0, 1).
+std::vector<double> breakpoints(const nurbs::PatchPieces& pp, int dir) {
+  std::vector<double> out;
+  const int n = dir == 0 ? pp.count_u : pp.count_v;
+  const nurbs::BezierPatch& first = pp.pieces.front();
+  const nurbs::BezierPatch& last = pp.pieces[dir == 0 ? static_cast<std::size_t>(pp.count_u - 1) : pp.pieces.size() - 1];
+  const double lo = dir == 0 ? first.u0 : first.v0, hi = dir == 0 ? last.u1 : last.v1;
+  for (int k = 1; k < n; ++k) {
+    const nurbs::BezierPatch& piece = pp.pieces[dir == 0 ? static_cast<std::size_t>(k) : static_cast<std::size_t>(k * pp.count_u)];
+    out.push_back(((dir == 0 ? piece.u0 : piece.v0) - lo) / (hi - lo));
+  }
+  return out;
+}
+
+// The point of a patch's side at normalised parameter tau along it (sides as side_curve).
+Vec3 side_point_at(const nurbs::PatchPieces& pp, int side, double tau) {
+  const bool along_u = side == 0 || side == 2;
+  const std::vector<double> b = breakpoints(pp, along_u ? 0 : 1);
+  const int k = static_cast<int>(std::upper_bound(b.begin(), b.end(), tau) - b.begin());
+  const double a0 = k == 0 ? 0.0 : b[static_cast<std::size_t>(k - 1)], a1 = k == static_cast<int>(b.size()) ? 1.0 : b[static_cast<std::size_t>(k)];
+  const double local = std::clamp((tau - a0) / (a1 - a0), 0.0, 1.0);
+  const int a = along_u ? k : (side == 1 ? pp.count_u - 1 : 0);
+  const int c = along_u ? (side == 2 ? pp.count_v - 1 : 0) : k;
+  const nurbs::BezierPatch& piece = pp.pieces[static_cast<std::size_t>(a + pp.count_u * c)];
+  return along_u ? nurbs::evaluate(piece, local, side == 2 ? 1.0 : 0.0) : nurbs::evaluate(piece, side == 1 ? 1.0 : 0.0, local);
+}
+
+// Splits every piece of the patch at the normalised parameters `at` along dir (exact: the
+// surface is unchanged, each span becomes two rational Bézier pieces by de Casteljau).
+void split_at(nurbs::PatchPieces& pp, int dir, const std::vector<double>& at) {
+  for (double tau : at) {
+    const std::vector<double> b = breakpoints(pp, dir);
+    const int k = static_cast<int>(std::upper_bound(b.begin(), b.end(), tau) - b.begin());
+    const double a0 = k == 0 ? 0.0 : b[static_cast<std::size_t>(k - 1)], a1 = k == static_cast<int>(b.size()) ? 1.0 : b[static_cast<std::size_t>(k)];
+    const double local = (tau - a0) / (a1 - a0);
+    nurbs::PatchPieces out;
+    out.count_u = pp.count_u + (dir == 0 ? 1 : 0);
+    out.count_v = pp.count_v + (dir == 1 ? 1 : 0);
+    for (int j = 0; j < pp.count_v; ++j)
+      for (int half = 0; half < (dir == 1 && j == k ? 2 : 1); ++half)
+        for (int i = 0; i < pp.count_u; ++i) {
+          const nurbs::BezierPatch& piece = pp.pieces[static_cast<std::size_t>(i + pp.count_u * j)];
+          if (dir == 0 && i == k) {
+            for (int h = 0; h < 2; ++h) {
+              nurbs::BezierPatch part = nurbs::restrict_patch(piece, h == 0 ? 0.0 : local, h == 0 ? local : 1.0, 0.0, 1.0);
+              const double mid = piece.u0 + local * (piece.u1 - piece.u0);
+              part.u0 = h == 0 ? piece.u0 : mid, part.u1 = h == 0 ? mid : piece.u1, part.v0 = piece.v0, part.v1 = piece.v1;
+              out.pieces.push_back(std::move(part));
+            }
+          } else if (dir == 1 && j == k) {
+            nurbs::BezierPatch part = nurbs::restrict_patch(piece, 0.0, 1.0, half == 0 ? 0.0 : local, half == 0 ? local : 1.0);
+            const double mid = piece.v0 + local * (piece.v1 - piece.v0);
+            part.u0 = piece.u0, part.u1 = piece.u1, part.v0 = half == 0 ? piece.v0 : mid, part.v1 = half == 0 ? mid : piece.v1;
+            out.pieces.push_back(std::move(part));
+          } else {
+            out.pieces.push_back(piece);
+          }
+        }
+    pp = std::move(out);
+  }
+}
+
+// Neighbouring patches whose shared side is the same curve (17 points along it agree within
+// kappa, in either direction) but broken at different knots: each is split at the other's
+// breakpoints, and those at its opposite side's partner's, until every matched pair has
+// the same spans; the exact match then compares control points as for conforming patches.
+void share_breakpoints(std::vector<nurbs::PatchPieces>& patches, double kappa) {
+  const int np = static_cast<int>(patches.size());
+  struct Pair {
+    int a, b;  // sides 4k + s
+    bool reversed;
+  };
+  std::vector<Pair> pairs;
+  auto degree_along = [&](int side) {
+    const nurbs::BezierPatch& p = patches[static_cast<std::size_t>(side / 4)].pieces.front();
+    return side % 4 == 0 || side % 4 == 2 ? p.degree_u : p.degree_v;
+  };
+  std::vector<std::array<Vec3, 3>> ends(static_cast<std::size_t>(4 * np));  // start, middle, end
+  for (int a = 0; a < 4 * np; ++a)
+    for (int i = 0; i < 3; ++i)
+      ends[static_cast<std::size_t>(a)][static_cast<std::size_t>(i)] = side_point_at(patches[static_cast<std::size_t>(a / 4)], a % 4, 0.5 * i);
+  const auto near = [kappa](const Vec3& x, const Vec3& y) { return norm(sub(x, y)) <= kappa; };
+  for (int a = 0; a < 4 * np; ++a) {
+    const nurbs::PatchPieces& pa = patches[static_cast<std::size_t>(a / 4)];
+    const auto& ea = ends[static_cast<std::size_t>(a)];
+    if (near(ea[0], ea[2]) && near(ea[0], ea[1])) continue;  // a pole (one point) pairs with nothing
+    for (int b = a + 1; b < 4 * np; ++b) {
+      if (degree_along(a) != degree_along(b)) continue;
+      const auto& eb = ends[static_cast<std::size_t>(b)];
+      const nurbs::PatchPieces& pb = patches[static_cast<std::size_t>(b / 4)];
+      for (bool rev : {false, true}) {
+        if (!near(ea[0], eb[rev ? 2 : 0]) || !near(ea[2], eb[rev ? 0 : 2]) || !near(ea[1], eb[1])) continue;
+        bool same = true;
+        for (int i = 0; i <= 16 && same; ++i) {
+          const double tau = i / 16.0;
+          same = norm(sub(side_point_at(pa, a % 4, tau), side_point_at(pb, b % 4, rev ? 1 - tau : tau))) <= kappa;
+        }
+        if (same) {
+          pairs.push_back({a, b, rev});
+          break;
+        }
+      }
+    }
+  }
+  if (pairs.empty()) return;
+  const auto dir_of = [](int side) { return side % 4 == 0 || side % 4 == 2 ? 0 : 1; };
+  std::vector<std::vector<double>> wanted(static_cast<std::size_t>(2 * np));
+  for (int k = 0; k < np; ++k)
+    for (int d = 0; d < 2; ++d) wanted[static_cast<std::size_t>(2 * k + d)] = breakpoints(patches[static_cast<std::size_t>(k)], d);
+  const auto add = [](std::vector<double>& set, double tau) {
+    for (double x : set)
+      if (std::abs(x - tau) <= 1e-12) return false;
+    if (tau <= 1e-12 || tau >= 1 - 1e-12) return false;
+    set.insert(std::upper_bound(set.begin(), set.end(), tau), tau);
+    return true;
+  };
+  for (bool changed = true; changed;) {
+    changed = false;
+    for (const Pair& p : pairs)
+      for (int w = 0; w < 2; ++w) {
+        const int from = w == 0 ? p.b : p.a, to = w == 0 ? p.a : p.b;
+        std::vector<double>& target = wanted[static_cast<std::size_t>(2 * (to / 4) + dir_of(to))];
+        for (double tau : std::vector<double>(wanted[static_cast<std::size_t>(2 * (from / 4) + dir_of(from))]))
+          changed = add(target, p.reversed ? 1 - tau : tau) || changed;
+        if (target.size() > 4096) return;  // runaway: leave it to the exact match to refuse
+      }
+  }
+  for (int k = 0; k < np; ++k)
+    for (int d = 0; d < 2; ++d) {
+      const std::vector<double> have = breakpoints(patches[static_cast<std::size_t>(k)], d);
+      std::vector<double> extra;
+      for (double tau : wanted[static_cast<std::size_t>(2 * k + d)]) {
+        bool present = false;
+        for (double x : have) present = present || std::abs(x - tau) <= 1e-12;
+        if (!present) extra.push_back(tau);
+      }
+      split_at(patches[static_cast<std::size_t>(k)], d, extra);
+    }
+}
+
 // Largest distance of the curve's control points from its first one.
 double pole_spread(const SideCurve& c) {
   const Vec3 p0 = cart(c.spans[0].data());
@@ -293,6 +436,7 @@ std::string build(const NurbsSurface& surface, Body& body) {
   if (!(body.size > 0)) return ".patches: all control points coincide";
   body.tolerance = 1e-12 * body.size;
   const double kappa = 1e-9 * body.size;  // sides closer than this are one curve
+  share_breakpoints(body.patches, kappa);
 
   // Sides: poles, then every other side matched with exactly one other side.
   std::vector<SideCurve> curves(static_cast<std::size_t>(4 * np));
@@ -342,8 +486,9 @@ std::string build(const NurbsSurface& surface, Body& body) {
     if (count == 0) {
       char buf[64];
       std::snprintf(buf, sizeof buf, "%.3g", nearest);
-      return field + ": meets no other patch boundary with the same control points within 1e-9 of the size " +
-             "(patches meet along shared boundary curves; nearest end point " + buf + " away, at " +
+      return field + ": meets no other patch boundary within 1e-9 of the size " +
+             "(patches meet along shared boundary curves, the same curve split at each other's knots; nearest end point " +
+             buf + " away, at " +
              format_point(cart(curves[a].spans.front().data())) + ")";
     }
     if (count > 1) return field + ": meets " + std::to_string(count) + " boundaries (" + names + ")";

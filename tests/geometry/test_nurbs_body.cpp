@@ -244,6 +244,78 @@ TEST(NurbsBody, CubeSphereAndRandomParticlesBuildClosedAndAgreeWithTheirTessella
     }
 }
 
+// Boehm's knot insertion of x into every row (along u) or column (along v) of a patch, in
+// homogeneous coordinates: the same surface with one more knot (independent of lib/geometry).
+NurbsPatch with_knot(const NurbsPatch& p, bool along_u, double x) {
+  const int deg = along_u ? p.degree[0] : p.degree[1];
+  const std::vector<double>& U = along_u ? p.knots_u : p.knots_v;
+  const int nu = static_cast<int>(p.knots_u.size()) - p.degree[0] - 1, nv = static_cast<int>(p.knots_v.size()) - p.degree[1] - 1;
+  const int n = along_u ? nu : nv, lines = along_u ? nv : nu;
+  int k = deg;
+  while (k + 1 < n && U[static_cast<std::size_t>(k + 1)] <= x) ++k;
+  NurbsPatch out = p;
+  std::vector<double> knots = U;
+  knots.insert(knots.begin() + k + 1, x);
+  (along_u ? out.knots_u : out.knots_v) = knots;
+  const int mu = along_u ? nu + 1 : nu, mv = along_u ? nv : nv + 1;
+  out.control_points.assign(static_cast<std::size_t>(mu * mv), Vec3{});
+  out.weights.assign(static_cast<std::size_t>(mu * mv), 1.0);
+  for (int line = 0; line < lines; ++line) {
+    auto in_at = [&](int i) { return static_cast<std::size_t>(along_u ? i + nu * line : line + nu * i); };
+    auto out_at = [&](int i) { return static_cast<std::size_t>(along_u ? i + mu * line : line + mu * i); };
+    auto hom = [&](int i) {
+      const double w = p.weights.empty() ? 1.0 : p.weights[in_at(i)];
+      const Vec3& c = p.control_points[in_at(i)];
+      return std::array<double, 4>{c[0] * w, c[1] * w, c[2] * w, w};
+    };
+    for (int i = 0; i <= n; ++i) {
+      std::array<double, 4> q;
+      if (i <= k - deg) {
+        q = hom(i);
+      } else if (i >= k + 1) {
+        q = hom(i - 1);
+      } else {
+        const double a = (x - U[static_cast<std::size_t>(i)]) / (U[static_cast<std::size_t>(i + deg)] - U[static_cast<std::size_t>(i)]);
+        const auto h0 = hom(i - 1), h1 = hom(i);
+        for (int e = 0; e < 4; ++e) q[static_cast<std::size_t>(e)] = (1 - a) * h0[static_cast<std::size_t>(e)] + a * h1[static_cast<std::size_t>(e)];
+      }
+      out.control_points[out_at(i)] = {q[0] / q[3], q[1] / q[3], q[2] / q[3]};
+      out.weights[out_at(i)] = q[3];
+    }
+  }
+  return out;
+}
+
+// Neighbouring patches whose shared side is the same curve broken at different knots (one
+// patch refined, as CAD models often are) meet: the body splits each at the other's knots.
+// The same body as the unrefined surface, side for side; a side moved off by 1e-6 is refused.
+TEST(NurbsBody, SidesBrokenAtDifferentKnotsStillMeet) {
+  for (const auto& [name, surface] : {std::pair<const char*, NurbsSurface>{"cube sphere", rn::cube_sphere(kCentre, 0.2)},
+                                      std::pair<const char*, NurbsSurface>{"torus", rn::exact_torus(kCentre, 0.2, 0.07)}}) {
+    SCOPED_TRACE(name);
+    NurbsSurface refined = surface;
+    refined.patches[0] = with_knot(with_knot(with_knot(refined.patches[0], true, 0.3), false, 0.55), false, 0.8);
+    const surface::Body a = body_of(surface), b = body_of(refined);
+    EXPECT_NEAR(surface::volume(b), surface::volume(a), 1e-13 * surface::volume(a));
+    std::mt19937_64 rng(5);
+    int checked = 0;
+    for (int i = 0; i < 5000; ++i) {
+      const Vec3 p = random_point(rng, a.box);
+      const int sa = surface::side(a, p);
+      if (sa == 0 || surface::distance(a, p) < 1e-9) continue;
+      ASSERT_EQ(surface::side(b, p), sa) << i;
+      ++checked;
+    }
+    EXPECT_GT(checked, 4000);
+    // The knot must matter: a boundary point of the refined side moved off by 1e-6 is refused.
+    NurbsSurface moved = refined;
+    moved.patches[0].control_points[1][2] += 1e-6;
+    surface::Body c;
+    const std::string problem = surface::build(moved, c);
+    EXPECT_NE(problem.find("meets no other patch boundary"), std::string::npos) << problem;
+  }
+}
+
 TEST(NurbsBody, ErrorsNameThePatchAndSide) {
   // Half a sphere: open along its cut.
   NurbsSurface half = rn::exact_sphere(kCentre, 0.2);
