@@ -60,6 +60,11 @@ class ShapeFamily {
   virtual std::optional<bool> overlap_same_family(const Shape& /*a*/, const Shape& /*b*/, double /*gap*/) const {
     return std::nullopt;
   }
+  // An answer to shapes_overlap(self, other, gap > 0) for a convex shape `other` of
+  // another family, where there is one: never false when they come within gap.
+  virtual std::optional<bool> overlap_convex(const Shape& /*self*/, const Shape& /*other*/, double /*gap*/) const {
+    return std::nullopt;
+  }
   // Two shapes of this family on which shapes_overlap's sampled test found nothing: do
   // their boundaries still cross (an edge of one piercing the other)?
   virtual bool edges_pierce(const Shape& /*a*/, const Shape& /*b*/) const { return false; }

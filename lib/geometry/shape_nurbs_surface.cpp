@@ -113,6 +113,15 @@ class NurbsSurfaceFamily final : public FamilyOf<NurbsSurface> {
     if (!ba || !bb) return std::nullopt;
     return surface::within(*ba, *bb, gap);
   }
+  // Near a sphere, ellipsoid or cylinder: the body's pieces against its support function,
+  // so that the level rules refine where they come close, not wherever their boxes meet.
+  std::optional<bool> overlap_convex(const Shape& self, const Shape& other, double gap) const override {
+    const auto body = surface::cached_body(of(self));
+    if (!body) return std::nullopt;
+    const ShapeFamily& f = shape_family(other);
+    return surface::within_convex(
+        *body, [&](const Vec3& d) { return f.support(other, d); }, [&](const Vec3& p) { return f.contains(other, p); }, gap);
+  }
   std::unique_ptr<SurfaceModel> surface_model(const Shape& s, const std::string& source,
                                               const std::string& field) const override {
     return make_nurbs_surface_model(s, source, field);

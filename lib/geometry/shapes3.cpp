@@ -25,6 +25,12 @@ bool overlap3(const Shape& a, const Shape& b, double gap) {
   const Box3 ba = fa.bounding_box(a), bb = fb.bounding_box(b);
   for (int k = 0; k < 3; ++k)
     if (ba.max[k] + gap < bb.min[k] || bb.max[k] + gap < ba.min[k]) return false;
+  if (gap > 0 && &fa != &fb) {  // a body (NURBS, STEP) and a convex shape: the body's pieces
+    if (fb.convex(b))
+      if (const std::optional<bool> r = fa.overlap_convex(a, b, gap)) return *r;
+    if (fa.convex(a))
+      if (const std::optional<bool> r = fb.overlap_convex(b, a, gap)) return *r;
+  }
   if (!fa.convex(a) || !fb.convex(b)) {
     // Conservative: with a positive gap, overlapping inflated boxes already count; else
     // points of either boundary inside the other, or mesh edges piercing the other mesh.

@@ -1380,6 +1380,60 @@ bool pieces_within(const nurbs::BezierPatch& a, const nurbs::BezierPatch& b, dou
   return pieces_within(lo, other, gap, depth + 1) || pieces_within(hi, other, gap, depth + 1);
 }
 
+// Is the piece within gap of the convex region? False when a direction separates its
+// control box from the region by more than gap (the axes, and the direction from the
+// region's centre to the box's nearest point, exact for a sphere); true when a corner of
+// the piece is within gap (the region's support along the corner's direction), or when the
+// piece is smaller than `resolution` (over-refinement only).
+bool piece_within_convex(const nurbs::BezierPatch& piece, const std::function<double(const Vec3&)>& support,
+                         const Vec3& centre, double gap, double resolution, int depth) {
+  const Box3 b = nurbs::control_box(piece);
+  const auto separated_along = [&](const Vec3& d) {
+    double lowest = 0;  // min over the box of d·y
+    for (int k = 0; k < 3; ++k) lowest += std::min(d[k] * b.min[k], d[k] * b.max[k]);
+    return support(d) < lowest - gap;
+  };
+  for (int k = 0; k < 3; ++k) {
+    Vec3 e{0, 0, 0};
+    e[k] = 1;
+    if (separated_along(e) || separated_along(scale(e, -1))) return false;
+  }
+  Vec3 nearest;
+  for (int k = 0; k < 3; ++k) nearest[k] = std::clamp(centre[k], b.min[k], b.max[k]);
+  const Vec3 towards = sub(nearest, centre);
+  if (norm(towards) > 0 && separated_along(scale(towards, 1 / norm(towards)))) return false;
+  if (norm(sub(b.max, b.min)) <= resolution || depth >= 24) return true;
+  nurbs::BezierPatch lo, hi;
+  const int p = piece.degree_u, q = piece.degree_v;
+  const Vec3 c00 = piece.cartesian(0, 0), c10 = piece.cartesian(p, 0), c01 = piece.cartesian(0, q), c11 = piece.cartesian(p, q);
+  if (norm(sub(c10, c00)) + norm(sub(c11, c01)) >= norm(sub(c01, c00)) + norm(sub(c11, c10)))
+    nurbs::halve_u(piece, lo, hi);
+  else
+    nurbs::halve_v(piece, lo, hi);
+  return piece_within_convex(lo, support, centre, gap, resolution, depth + 1) ||
+         piece_within_convex(hi, support, centre, gap, resolution, depth + 1);
+}
+
+}  // namespace
+
+bool within_convex(const Body& a, const std::function<double(const Vec3&)>& support,
+                   const std::function<bool(const Vec3&)>& contains, double gap) {
+  Vec3 centre;  // of the region's box: inside a centrally symmetric convex region
+  for (int k = 0; k < 3; ++k) {
+    Vec3 e{0, 0, 0};
+    e[k] = 1;
+    centre[k] = 0.5 * (support(e) - support(scale(e, -1)));
+  }
+  // One inside the other (a tessellation vertex is a surface point).
+  if (contains(a.mesh.vertices.front()) || side(a, centre) >= 0) return true;
+  const double resolution = 1e-3 * a.size;
+  for (std::size_t c = 0; c < a.cells.size(); ++c)
+    if (piece_within_convex(a.cell_pieces[c], support, centre, gap, resolution, 0)) return true;
+  return false;
+}
+
+namespace {
+
 }  // namespace
 
 bool within(const Body& a, const Body& b, double gap) {

@@ -8,6 +8,7 @@
 // Every answer is a pure function of the descriptor and the query (no state, no threads),
 // so meshes stay the same on any number of partitions.
 #include <array>
+#include <functional>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -110,6 +111,12 @@ double distance(const Body& body, const Vec3& p, Vec3* normal = nullptr);
 // Do the closed regions of a and b come within gap of each other? Never false when they
 // do; true also when they miss by less than the subdivision resolves (over-refinement only).
 bool within(const Body& a, const Body& b, double gap);
+// The same against a convex region, given by its support function h(d) = max x·d and a
+// membership test (its box's centre must lie in it: spheres, ellipsoids, cylinders): never
+// false when they come within gap; true also when they miss by less than 1e-3 of the
+// body's size.
+bool within_convex(const Body& a, const std::function<double(const Vec3&)>& support,
+                   const std::function<bool(const Vec3&)>& contains, double gap);
 // The extremes of x over the surface, and of y over its section at x (where the length of a
 // line through the body has a square-root kink: breakpoints of the oracle's measures), to
 // about 1e-12 (x) and 1e-6 (y) of the size. Interior tangencies (a torus's hole) are not among them.

@@ -8,6 +8,7 @@
 #include <random>
 
 #include "core/vec_math.hpp"
+#include "geometry/shapes.hpp"
 #include "geometry/surface_body.hpp"
 #include "../support/random_nurbs3.hpp"
 
@@ -314,6 +315,42 @@ TEST(NurbsBody, SidesBrokenAtDifferentKnotsStillMeet) {
     const std::string problem = surface::build(moved, c);
     EXPECT_NE(problem.find("meets no other patch boundary"), std::string::npos) << problem;
   }
+}
+
+// The level rules' question for a NURBS body and a convex analytic shape (shapes_overlap
+// with a gap): answered on the body's pieces, so true whenever they come within the gap,
+// false once they miss it by more than the resolution (1e-3 of the body's size); a sphere
+// inside the body, or the body inside a sphere, overlaps.
+TEST(NurbsBody, OverlapsWithConvexShapesOnItsPieces) {
+  const double r = 0.2, rs = 0.1, gap = 0.05;
+  const Shape nurbs = rn::exact_sphere(kCentre, r);
+  std::mt19937_64 rng(9);
+  int near_true = 0, far_false = 0;
+  for (int i = 0; i < 300; ++i) {
+    Vec3 d{uniform(rng, -1, 1), uniform(rng, -1, 1), uniform(rng, -1, 1)};
+    d = scale(d, 1 / norm(d));
+    const double dist = uniform(rng, 0.25, 0.45);  // centre distance; the surfaces' gap is dist − 0.3
+    const Shape ball = Sphere{add(kCentre, scale(d, dist)), rs};
+    const bool answer = shapes_overlap(nurbs, ball, gap);
+    const double miss = dist - r - rs;
+    if (miss < gap) {
+      EXPECT_TRUE(answer) << "miss " << miss;
+      ++near_true;
+    } else if (miss > gap + 2e-3) {
+      EXPECT_FALSE(answer) << "miss " << miss;
+      ++far_false;
+    }
+    EXPECT_EQ(shapes_overlap(ball, nurbs, gap), answer);  // either order
+  }
+  EXPECT_GT(near_true, 50);
+  EXPECT_GT(far_false, 50);
+  EXPECT_TRUE(shapes_overlap(nurbs, Shape{Sphere{kCentre, 0.05}}, gap));  // inside the body
+  EXPECT_TRUE(shapes_overlap(nurbs, Shape{Sphere{kCentre, 1.0}}, gap));   // the body inside it
+  // A cylinder beside it, its axis along z: apart by 0.1 − 0.05, then by more than the gap.
+  const Vec3 side{kCentre[0] + r + 0.05 + 0.05, kCentre[1], kCentre[2]};
+  EXPECT_TRUE(shapes_overlap(nurbs, Shape{Cylinder{sub(side, {0, 0, 0.3}), add(side, {0, 0, 0.3}), 0.05}}, gap));
+  const Vec3 far{kCentre[0] + r + 0.05 + 0.06, kCentre[1], kCentre[2]};
+  EXPECT_FALSE(shapes_overlap(nurbs, Shape{Cylinder{sub(far, {0, 0, 0.3}), add(far, {0, 0, 0.3}), 0.05}}, gap));
 }
 
 TEST(NurbsBody, ErrorsNameThePatchAndSide) {
