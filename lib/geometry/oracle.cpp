@@ -15,7 +15,9 @@
 #include "core/vec_math.hpp"
 #include "geometry/box_index.hpp"
 #include "geometry/overlap_groups.hpp"
+#include "geometry/shape_family.hpp"
 #include "geometry/shape_model.hpp"
+#include "geometry/shapes.hpp"
 #include "geometry/shapes_detail.hpp"
 
 namespace cisamr::geometry {
@@ -187,10 +189,13 @@ bool Oracle<Dim>::Impl::regions_intersect(std::int32_t i, std::int32_t j, bool i
   const Model& b = *shapes[j];
   const double depth_tol = 1e-10 * std::min(box_diagonal(a.box()), box_diagonal(b.box()));
   if (const auto exact = a.regions_intersect(b, interiors, depth_tol)) return *exact;
+  // Convex pair: min over directions of h_a(d) + h_b(−d) is the penetration depth (in 2D
+  // this replaced boundary polylines of both, rebuilt per pair: 2.8 s of E2's 12,000 pits).
+  const Shape &sa = scene.inclusions[i].shape, &sb = scene.inclusions[j].shape;
   if constexpr (Dim == 3) {
-    // Convex pair: min over directions of h_a(d) + h_b(−d) is the penetration depth.
-    if (a.convex() && b.convex())
-      return detail::overlap3(scene.inclusions[i].shape, scene.inclusions[j].shape, interiors ? -depth_tol : 0.0);
+    if (a.convex() && b.convex()) return detail::overlap3(sa, sb, interiors ? -depth_tol : 0.0);
+  } else {
+    if (shape_family(sa).convex(sa) && shape_family(sb).convex(sb)) return shapes_overlap(sa, sb, interiors ? -depth_tol : 0.0);
   }
   auto boundary_samples = [&](std::int32_t k) {
     if constexpr (Dim == 2) return shapes[k]->boundary_polyline();
