@@ -1,5 +1,6 @@
 // shapes_overlap for 3D shapes (shapes_detail.hpp): what two families answer, combined.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <optional>
 #include <vector>
@@ -42,21 +43,38 @@ bool overlap3(const Shape& a, const Shape& b, double gap) {
     return &fa == &fb && fa.edges_pierce(a, b);
   }
   // Convex bodies are apart by more than gap iff some unit d has h_a(d) + h_b(−d) < −gap.
-  // Search: Fibonacci directions, then a shrinking pattern search in (θ, φ) from the best.
-  auto g = [&](double th, double ph) {
-    const Vec3 d = direction(th, ph);
-    return fa.support(a, d) + fb.support(b, Vec3{-d[0], -d[1], -d[2]});
-  };
-  const int n = 1500;
-  const double golden = M_PI * (3 - std::sqrt(5.0));
+  const auto gap_along = [&](const Vec3& d) { return fa.support(a, d) + fb.support(b, Vec3{-d[0], -d[1], -d[2]}); };
+  // Cheap answers first (most pairs the level rules ask about): the line through the
+  // centres of the two boxes separates them, or a point lies in both (centrally symmetric
+  // families: a box's centre is in its shape).
+  const Vec3 centre_a = scale(add(ba.min, ba.max), 0.5), centre_b = scale(add(bb.min, bb.max), 0.5);
+  const Vec3 between = sub(centre_b, centre_a);
+  if (norm(between) > 0 && gap_along(scale(between, 1 / norm(between))) < -gap) return false;
+  if (gap >= 0 && (fb.contains(b, centre_a) || fa.contains(a, centre_b))) return true;
+  // Search: Fibonacci directions (a table built once), then a shrinking pattern search in
+  // (θ, φ) from the best.
+  auto g = [&](double th, double ph) { return gap_along(direction(th, ph)); };
+  constexpr int n = 1500;
   struct Start {
     double v, th, ph;
   };
+  static const std::vector<std::array<double, 5>> fibonacci = [] {  // θ, φ, d
+    std::vector<std::array<double, 5>> t;
+    const double golden = M_PI * (3 - std::sqrt(5.0));
+    for (int i = 0; i < n; ++i) {
+      const double z = 1 - 2 * (i + 0.5) / n;
+      const double th = std::acos(z), ph = std::fmod(golden * i, 2 * M_PI);
+      const Vec3 d = direction(th, ph);
+      t.push_back({th, ph, d[0], d[1], d[2]});
+    }
+    return t;
+  }();
   std::vector<Start> starts;
-  for (int i = 0; i < n; ++i) {
-    const double z = 1 - 2 * (i + 0.5) / n;
-    const double th = std::acos(z), ph = std::fmod(golden * i, 2 * M_PI);
-    starts.push_back({g(th, ph), th, ph});
+  starts.reserve(n);
+  for (const auto& f : fibonacci) {
+    const double v = gap_along(Vec3{f[2], f[3], f[4]});
+    if (v < -gap) return false;  // a separating direction already
+    starts.push_back({v, f[0], f[1]});
   }
   std::partial_sort(starts.begin(), starts.begin() + 4, starts.end(), [](const Start& x, const Start& y) { return x.v < y.v; });
   double best = starts[0].v;

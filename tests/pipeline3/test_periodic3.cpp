@@ -124,16 +124,16 @@ class PeriodicScenes3 : public ::testing::TestWithParam<unsigned> {};
 
 TEST_P(PeriodicScenes3, FacesMatchAndTheMeshIsCertified) {
   Totals totals;
-  for (unsigned seed = GetParam(); seed < GetParam() + 20; ++seed) check_scene(seed, totals);
+  for (unsigned seed = GetParam(); seed < GetParam() + 10; ++seed) check_scene(seed, totals);
   std::printf("[periodic3] seeds %u-%u: %lld scenes, %lld images, %lld max-face facets matched, worst aspect %.3f, "
               "%lld swaps, %lld collapsed nodes\n",
-              GetParam(), GetParam() + 19, static_cast<long long>(totals.scenes), static_cast<long long>(totals.images),
+              GetParam(), GetParam() + 9, static_cast<long long>(totals.scenes), static_cast<long long>(totals.images),
               static_cast<long long>(totals.matched_facets), totals.worst, static_cast<long long>(totals.swaps),
               static_cast<long long>(totals.collapsed));
-  EXPECT_GE(totals.scenes, 15);
-  EXPECT_GT(totals.images, 10);  // inclusions do cross the faces
-  EXPECT_GT(totals.matched_facets, 1000);
-  EXPECT_GT(totals.cohesive_cells, 1000);
+  EXPECT_GE(totals.scenes, 7);
+  EXPECT_GT(totals.images, 5);  // inclusions do cross the faces
+  EXPECT_GT(totals.matched_facets, 500);
+  EXPECT_GT(totals.cohesive_cells, 500);
 }
 
 // One scene by seed (CISAMR_SEED), for debugging; skipped otherwise.
@@ -144,8 +144,8 @@ TEST(Periodic3Seed, FromEnvironment) {
   check_scene(std::strtoull(seed, nullptr, 10), totals);
 }
 
-// 5 × 20 = 100 scenes.
-INSTANTIATE_TEST_SUITE_P(Seeds, PeriodicScenes3, ::testing::Values(1u, 21u, 41u, 61u, 81u));
+// 10 × 10 = 100 scenes (shards of 10 keep one slow scene from holding the suite's tail).
+INSTANTIATE_TEST_SUITE_P(Seeds, PeriodicScenes3, ::testing::Values(1u, 11u, 21u, 31u, 41u, 51u, 61u, 71u, 81u, 91u));
 
 // The geometry wraps: a sphere listed once across a corner of the box keeps its whole
 // volume inside, and the faces match; without periodicity it is clipped.
