@@ -9,6 +9,7 @@
 #include <unordered_map>
 #include <utility>
 
+#include "core/check.hpp"
 #include "grid/cut_stencil3.hpp"
 #include "mesh/metrics.hpp"
 
@@ -42,14 +43,21 @@ struct Candidate {
 };
 
 // Crossings of one phase-changing edge nearest each end, for snap candidates.
+// The crossings of a phase-changing edge that build_options needs besides its cut. The
+// ends' frame points and positions are not kept (they were two thirds of the record, the
+// largest table alive at the mesher's peak): build_options derives them from the cut's keys.
 struct EdgeEnds {
-  LatticePoint3 qa{}, qb{};  // lo and hi in the edge's frame (radapt3.hpp, EdgeFrame)
-  Vec3 pa{}, pb{};           // their positions there
-  bool axis = true;
-  double length = 0;
   bool any = false;
   double t_front = 0, t_back = 0;  // along lo → hi
   PhaseMask mask_front = 0, mask_back = 0;
+};
+
+// An edge's ends in its frame (radapt3.hpp, EdgeFrame): lattice points, positions, length.
+struct EdgeGeometry {
+  LatticePoint3 qa{}, qb{};
+  Vec3 pa{}, pb{};
+  bool axis = true;
+  double length = 0;
 };
 
 class Snapper {
@@ -216,12 +224,7 @@ class Snapper {
   // frame.a and frame.b, lo's key the smaller there).
   void add_edge(std::int32_t lo, std::int32_t hi, const EdgeFrame& frame, std::int32_t leaf) {
     EdgeEnds ends;
-    ends.qa = frame.a, ends.qb = frame.b;
-    ends.pa = frame_position(lo, frame.a), ends.pb = frame_position(hi, frame.b);
-    const Vec3& pa = ends.pa;
-    const Vec3& pb = ends.pb;
-    const LatticePoint3& qa = frame.a;
-    const LatticePoint3& qb = frame.b;
+    const Vec3 pa = frame_position(lo, frame.a), pb = frame_position(hi, frame.b);
     if (frame.on_periodic_plane(lattice_)) {  // seen from two frames: its own candidates
       oracle_.candidates(segment_box(pa, pb), plane_candidates_);
       oracle_.crossings(pa, pb, plane_candidates_, crossings_);
@@ -231,10 +234,8 @@ class Snapper {
     EdgeCut cut;
     cut.lo = grid::key3(frame.a);
     cut.hi = grid::key3(frame.b);
-    int differing = 0;
-    for (int d = 0; d < 3; ++d) differing += qa[d] != qb[d] ? 1 : 0;
-    ends.axis = differing == 1;
-    ends.length = mesh::distance<3>(pa, pb);
+    // build_options finds the frame again from the keys.
+    CISAMR_CHECK(grid::key3_point(cut.lo) == frame.a && grid::key3_point(cut.hi) == frame.b, "radapt3: an edge frame its keys do not give back");
     const PhaseMask ma = nodes_.mask[static_cast<std::size_t>(lo)], mb = nodes_.mask[static_cast<std::size_t>(hi)];
     const geometry::Crossing* chosen = crossing_between(crossings_, ma, mb);
     if (chosen == nullptr && !crossings_.empty()) {
@@ -286,6 +287,18 @@ class Snapper {
   //    takes its next option, usually harmless); staying next to a crossing (which would
   //    leave a sliver in the split) is refused before any snap, since collapsing there moves
   //    the interface by almost nothing; staying far from every crossing comes last.
+  // What add_edge had in hand: the edge's frame points from its cut's keys, their positions.
+  EdgeGeometry edge_geometry(const EdgeCut& cut, std::int32_t lo, std::int32_t hi) const {
+    EdgeGeometry g;
+    g.qa = grid::key3_point(cut.lo), g.qb = grid::key3_point(cut.hi);
+    g.pa = frame_position(lo, g.qa), g.pb = frame_position(hi, g.qb);
+    int differing = 0;
+    for (int d = 0; d < 3; ++d) differing += g.qa[d] != g.qb[d] ? 1 : 0;
+    g.axis = differing == 1;
+    g.length = mesh::distance<3>(g.pa, g.pb);
+    return g;
+  }
+
   void build_options() {
     const std::size_t n = node_count();
     collapse_mask_.assign(n, 0);
@@ -295,16 +308,17 @@ class Snapper {
       const EdgeCut& cut = nodes_.edges[e];
       const EdgeEnds& ends = ends_[e];
       const std::int32_t lo = nodes_.id(canonical_key(lattice_, cut.lo)), hi = nodes_.id(canonical_key(lattice_, cut.hi));
+      const EdgeGeometry geo = edge_geometry(cut, lo, hi);
       for (int side = 0; side < 2; ++side) {
         const std::int32_t v = side == 0 ? lo : hi, w = side == 0 ? hi : lo;
         const auto uv = static_cast<std::size_t>(v), uw = static_cast<std::size_t>(w);
         collapse_mask_[uv] |= nodes_.mask[uw];
         {
-          const double to_crossing = ends.any ? (side == 0 ? ends.t_front : 1.0 - ends.t_back) * ends.length : ends.length;
+          const double to_crossing = ends.any ? (side == 0 ? ends.t_front : 1.0 - ends.t_back) * geo.length : geo.length;
           const PhaseMask beyond = ends.any ? (side == 0 ? ends.mask_front : ends.mask_back) & ~nodes_.mask[uv] : 0;
           for (PhaseMask rest = nodes_.mask[uw]; rest != 0; rest &= rest - 1) {
             const int phase = std::countr_zero(rest);
-            const double d = (beyond >> phase) & 1 ? to_crossing : ends.length;
+            const double d = (beyond >> phase) & 1 ? to_crossing : geo.length;
             auto [it, inserted] = reach_.try_emplace(static_cast<std::uint64_t>(v) * 64 + static_cast<std::uint64_t>(phase), d);
             if (!inserted) it->second = std::min(it->second, d);
           }
@@ -313,16 +327,16 @@ class Snapper {
         const double fraction = side == 0 ? ends.t_front : 1.0 - ends.t_back;
         nearest[uv] = std::min(nearest[uv], fraction);
         if (single_phase(nodes_.mask[uv]) < 0) continue;  // already on an interface
-        if (fraction > (ends.axis ? options_.alpha : options_.alpha_diagonal)) continue;
+        if (fraction > (geo.axis ? options_.alpha : options_.alpha_diagonal)) continue;
         // In the edge's frame (on a periodic plane a node slides within it, so its frame is
         // then its canonical one and the snapped position needs no shift).
-        if (!slides_within_domain(side == 0 ? ends.qa : ends.qb, side == 0 ? ends.qb : ends.qa)) continue;
+        if (!slides_within_domain(side == 0 ? geo.qa : geo.qb, side == 0 ? geo.qb : geo.qa)) continue;
         Candidate c;
         c.node = v;
         c.fraction = fraction;
-        c.distance = fraction * ends.length;
+        c.distance = fraction * geo.length;
         c.other = nodes_.key[uw];
-        const Vec3 &pa = ends.pa, &pb = ends.pb;
+        const Vec3 &pa = geo.pa, &pb = geo.pb;
         const double t = side == 0 ? ends.t_front : ends.t_back;
         for (int d = 0; d < 3; ++d) c.position[d] = pa[d] + t * (pb[d] - pa[d]);
         c.mask = side == 0 ? ends.mask_front : ends.mask_back;
