@@ -124,4 +124,19 @@ class FieldWriter {
   }
 };
 
+// The placement members (scale, rotation, translate) of STL, NURBS-surface and STEP
+// descriptors: read where present, written where not the default.
+template <class Placed>
+void read_placement(const FieldReader& f, Placed& s) {
+  if (f.has("scale")) s.scale = f.positive("scale");
+  if (f.has("rotation")) s.rotation = f.rotation("rotation");
+  if (f.has("translate")) s.translate = f.vec<3>("translate");
+}
+template <class Placed>
+void write_placement(const Placed& s, FieldWriter& f) {
+  if (s.scale != 1) f.number("scale", s.scale);
+  if (!is_identity(s.rotation)) f.rotation("rotation", s.rotation);
+  if (s.translate != Vec3{0, 0, 0}) f.vec("translate", s.translate);
+}
+
 }  // namespace cisamr::geometry

@@ -50,18 +50,14 @@ class NurbsSurfaceFamily final : public FamilyOf<NurbsSurface> {
     NurbsSurface surface;
     if (f.array_size("patches") == 0) f.fail("patches", "needs at least one patch");
     f.objects("patches", [&](const FieldReader& patch) { surface.patches.push_back(read_patch(patch)); });
-    if (f.has("scale")) surface.scale = f.positive("scale");
-    if (f.has("rotation")) surface.rotation = f.rotation("rotation");
-    if (f.has("translate")) surface.translate = f.vec<3>("translate");
+    read_placement(f, surface);
     return surface;
   }
   // The flat form (u fastest) and the placement where it is not the default, as for STL:
   // reading it back gives the same descriptor bit for bit.
   void write(const Shape& shape, FieldWriter& f) const override {
     const NurbsSurface& s = of(shape);
-    if (s.scale != 1) f.number("scale", s.scale);
-    if (!is_identity(s.rotation)) f.rotation("rotation", s.rotation);
-    if (s.translate != Vec3{0, 0, 0}) f.vec("translate", s.translate);
+    write_placement(s, f);
     f.objects("patches", s.patches.size(), [&](FieldWriter& w, std::size_t i) {
       const NurbsPatch& p = s.patches[i];
       w.integers("degree", {p.degree[0], p.degree[1]});

@@ -34,25 +34,14 @@ std::shared_ptr<const surface::Body> body_of(const StepSolids& s, std::string* p
   key.append(reinterpret_cast<const char*>(&s.scale), sizeof s.scale);
   key.append(reinterpret_cast<const char*>(&s.rotation), sizeof s.rotation);
   key.append(reinterpret_cast<const char*>(&s.translate), sizeof s.translate);
-  static std::mutex mutex;
-  static std::map<std::string, std::pair<std::shared_ptr<const surface::Body>, std::string>> cache;
-  {
-    std::lock_guard<std::mutex> lock(mutex);
-    if (const auto it = cache.find(key); it != cache.end()) {
-      if (problem) *problem = it->second.second;
-      return it->second.first;
-    }
-  }
-  auto body = std::make_shared<surface::Body>();
-  std::string why = surface::build_brep(*s.brep, s.solids, placement_of(s), *body);
-  if (!why.empty()) why = ".file: " + s.file.substr(s.file.find_last_of('/') + 1) + why;
-  std::shared_ptr<const surface::Body> result;
-  if (why.empty()) result = std::move(body);
-  if (problem) *problem = why;
-  std::lock_guard<std::mutex> lock(mutex);
-  if (cache.size() >= 256) cache.clear();
-  cache.emplace(key, std::make_pair(result, why));
-  return result;
+  return surface::cached(
+      key,
+      [&](surface::Body& body) {
+        std::string why = surface::build_brep(*s.brep, s.solids, placement_of(s), body);
+        if (!why.empty()) why = ".file: " + s.file.substr(s.file.find_last_of('/') + 1) + why;
+        return why;
+      },
+      problem);
 }
 
 class StepFamily final : public FamilyOf<StepSolids> {
@@ -78,18 +67,14 @@ class StepFamily final : public FamilyOf<StepSolids> {
         s.solids.push_back(k);
       }
     }
-    if (f.has("scale")) s.scale = f.positive("scale");
-    if (f.has("rotation")) s.rotation = f.rotation("rotation");
-    if (f.has("translate")) s.translate = f.vec<3>("translate");
+    read_placement(f, s);
     return s;
   }
   void write(const Shape& shape, FieldWriter& f) const override {
     const StepSolids& s = of(shape);
     f.file("file", s.file);
     if (!s.solids.empty()) f.integers("solids", s.solids);
-    if (s.scale != 1) f.number("scale", s.scale);
-    if (!is_identity(s.rotation)) f.rotation("rotation", s.rotation);
-    if (s.translate != Vec3{0, 0, 0}) f.vec("translate", s.translate);
+    write_placement(s, f);
   }
   Box3 bounding_box(const Shape& s) const override {
     const auto body = body_of(of(s));

@@ -112,17 +112,13 @@ class StlFamily final : public FamilyOf<StlSurface> {
     SurfaceFile file = f.surface_file("file");
     s.file = std::move(file.path);
     s.triangles = std::move(file.triangles);
-    if (f.has("scale")) s.scale = f.positive("scale");
-    if (f.has("rotation")) s.rotation = f.rotation("rotation");
-    if (f.has("translate")) s.translate = f.vec<3>("translate");
+    read_placement(f, s);
     return s;
   }
   void write(const Shape& shape, FieldWriter& f) const override {
     const StlSurface& s = of(shape);
     f.file("file", s.file);
-    if (s.scale != 1) f.number("scale", s.scale);
-    if (!is_identity(s.rotation)) f.rotation("rotation", s.rotation);
-    if (s.translate != Vec3{0, 0, 0}) f.vec("translate", s.translate);
+    write_placement(s, f);
   }
   // A surface whose triangles are not loaded (a parallel rank that did not read the file)
   // has an empty box, no measure, no samples and contains nothing.

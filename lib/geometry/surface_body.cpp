@@ -285,6 +285,17 @@ Vec3 unit(const Vec3& v) {
   return n > 0 ? scale(v, 1 / n) : Vec3{0, 0, 0};
 }
 
+// Halves a piece across its longer parameter direction (by the lengths of its corner-to-
+// corner sides): the split of every subdivision search here.
+void halve_longer(const nurbs::BezierPatch& piece, nurbs::BezierPatch& lo, nurbs::BezierPatch& hi) {
+  const int p = piece.degree_u, q = piece.degree_v;
+  const Vec3 c00 = piece.cartesian(0, 0), c10 = piece.cartesian(p, 0), c01 = piece.cartesian(0, q), c11 = piece.cartesian(p, q);
+  if (norm(sub(c10, c00)) + norm(sub(c11, c01)) >= norm(sub(c01, c00)) + norm(sub(c11, c10)))
+    nurbs::halve_u(piece, lo, hi);
+  else
+    nurbs::halve_v(piece, lo, hi);
+}
+
 double max_abs(const Box3& b) {
   double m = 0;
   for (int k = 0; k < 3; ++k) m = std::max({m, std::abs(b.min[k]), std::abs(b.max[k])});
@@ -999,26 +1010,7 @@ std::shared_ptr<const Body> cached_body(const NurbsSurface& surface, std::string
   fnv1a(h, &surface.scale, sizeof surface.scale);
   fnv1a(h, &surface.rotation, sizeof surface.rotation);
   fnv1a(h, &surface.translate, sizeof surface.translate);
-
-  static std::mutex mutex;
-  static std::map<std::uint64_t, std::pair<std::shared_ptr<const Body>, std::string>> cache;
-  {
-    std::lock_guard<std::mutex> lock(mutex);
-    const auto it = cache.find(h);
-    if (it != cache.end()) {
-      if (problem) *problem = it->second.second;
-      return it->second.first;
-    }
-  }
-  auto body = std::make_shared<Body>();
-  std::shared_ptr<const Body> result;
-  const std::string why = build(surface, *body);
-  if (why.empty()) result = std::move(body);
-  if (problem) *problem = why;
-  std::lock_guard<std::mutex> lock(mutex);
-  if (cache.size() >= 256) cache.clear();
-  cache.emplace(h, std::make_pair(result, why));
-  return result;
+  return cached(h, [&](Body& body) { return build(surface, body); }, problem);
 }
 
 // ---------------------------------------------------------------- queries
@@ -1239,12 +1231,7 @@ bool piece_touches(const nurbs::BezierPatch& piece, const Box3& box, double tol,
   if (norm(sub(cb.max, cb.min)) <= tol || depth >= 40) return true;
   ++stats().touch_refinements;
   nurbs::BezierPatch lo, hi;
-  const double su = norm(sub(piece.cartesian(p, 0), piece.cartesian(0, 0))) + norm(sub(piece.cartesian(p, q), piece.cartesian(0, q)));
-  const double sv = norm(sub(piece.cartesian(0, q), piece.cartesian(0, 0))) + norm(sub(piece.cartesian(p, q), piece.cartesian(p, 0)));
-  if (su >= sv)
-    nurbs::halve_u(piece, lo, hi);
-  else
-    nurbs::halve_v(piece, lo, hi);
+  halve_longer(piece, lo, hi);
   return piece_touches(lo, box, tol, depth + 1) || piece_touches(hi, box, tol, depth + 1);
 }
 
@@ -1372,11 +1359,7 @@ bool pieces_within(const nurbs::BezierPatch& a, const nurbs::BezierPatch& b, dou
   const nurbs::BezierPatch& big = da >= db ? a : b;
   const nurbs::BezierPatch& other = da >= db ? b : a;
   nurbs::BezierPatch lo, hi;
-  const std::array<Vec3, 4> c = da >= db ? ca : cb;
-  if (norm(sub(c[1], c[0])) + norm(sub(c[3], c[2])) >= norm(sub(c[2], c[0])) + norm(sub(c[3], c[1])))
-    nurbs::halve_u(big, lo, hi);
-  else
-    nurbs::halve_v(big, lo, hi);
+  halve_longer(big, lo, hi);
   return pieces_within(lo, other, gap, depth + 1) || pieces_within(hi, other, gap, depth + 1);
 }
 
@@ -1404,12 +1387,7 @@ bool piece_within_convex(const nurbs::BezierPatch& piece, const std::function<do
   if (norm(towards) > 0 && separated_along(scale(towards, 1 / norm(towards)))) return false;
   if (norm(sub(b.max, b.min)) <= resolution || depth >= 24) return true;
   nurbs::BezierPatch lo, hi;
-  const int p = piece.degree_u, q = piece.degree_v;
-  const Vec3 c00 = piece.cartesian(0, 0), c10 = piece.cartesian(p, 0), c01 = piece.cartesian(0, q), c11 = piece.cartesian(p, q);
-  if (norm(sub(c10, c00)) + norm(sub(c11, c01)) >= norm(sub(c01, c00)) + norm(sub(c11, c10)))
-    nurbs::halve_u(piece, lo, hi);
-  else
-    nurbs::halve_v(piece, lo, hi);
+  halve_longer(piece, lo, hi);
   return piece_within_convex(lo, support, centre, gap, resolution, depth + 1) ||
          piece_within_convex(hi, support, centre, gap, resolution, depth + 1);
 }
@@ -1484,13 +1462,8 @@ double surface_extreme(const Body& body, int axis, double sign, int plane_axis, 
       return best.key;
     }
     const nurbs::BezierPatch& q = best.piece;
-    const int p = q.degree_u, r = q.degree_v;
     nurbs::BezierPatch lo, hi;
-    if (norm(sub(q.cartesian(p, 0), q.cartesian(0, 0))) + norm(sub(q.cartesian(p, r), q.cartesian(0, r))) >=
-        norm(sub(q.cartesian(0, r), q.cartesian(0, 0))) + norm(sub(q.cartesian(p, r), q.cartesian(p, 0))))
-      nurbs::halve_u(q, lo, hi);
-    else
-      nurbs::halve_v(q, lo, hi);
+    halve_longer(q, lo, hi);
     push(std::move(lo));
     push(std::move(hi));
   }

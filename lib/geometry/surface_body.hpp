@@ -10,7 +10,9 @@
 #include <array>
 #include <functional>
 #include <cstdint>
+#include <map>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -97,6 +99,31 @@ std::string build_brep(const BrepData& data, const std::vector<int>& solids, con
 // the same descriptor, and every partition's oracle builds its own). Throws nothing: a
 // descriptor that does not build gives nullptr and its problem in `problem`.
 std::shared_ptr<const Body> cached_body(const NurbsSurface& surface, std::string* problem = nullptr);
+
+// A process-wide cache of bodies by key, one per call site: `build(body)` returns "" or the
+// problem and runs once per key (the problem is cached too); at most 256 entries, then
+// cleared. Thread-safe; two threads may build the same key once each.
+template <class Key, class Build>
+std::shared_ptr<const Body> cached(const Key& key, Build&& build, std::string* problem) {
+  static std::mutex mutex;
+  static std::map<Key, std::pair<std::shared_ptr<const Body>, std::string>> cache;
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    if (const auto it = cache.find(key); it != cache.end()) {
+      if (problem) *problem = it->second.second;
+      return it->second.first;
+    }
+  }
+  auto body = std::make_shared<Body>();
+  const std::string why = build(*body);
+  std::shared_ptr<const Body> result;
+  if (why.empty()) result = std::move(body);
+  if (problem) *problem = why;
+  std::lock_guard<std::mutex> lock(mutex);
+  if (cache.size() >= 256) cache.clear();
+  cache.emplace(key, std::make_pair(result, why));
+  return result;
+}
 
 // +1 inside, 0 within τ of the surface, −1 outside.
 int side(const Body& body, const Vec3& p);
