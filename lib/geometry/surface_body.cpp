@@ -997,9 +997,23 @@ std::string build_brep(const BrepData& data, const std::vector<int>& solids, con
     return ": tessellation: " + problem;
   }
   std::vector<Box3> boxes(body.cells.size());
-  body.box = box;
-  for (std::size_t c = 0; c < boxes.size(); ++c) boxes[c] = body.cells[c].box, grow(body.box, boxes[c].min), grow(body.box, boxes[c].max);
+  for (std::size_t c = 0; c < boxes.size(); ++c) boxes[c] = body.cells[c].box;
   body.cell_bvh.build(boxes);
+  // The box of the solids, not of the cells: a trimmed face's cells hold its untrimmed
+  // pieces, which may reach far beyond the solid (a plane's whole rectangle), and the
+  // oracle takes this box for the inclusion's (measures integrate by sections when it leaves
+  // the domain). The imported boxes hold the exact faces and the mesh; placed by their
+  // corners and widened by the edge tolerances and rounding.
+  body.box = box;
+  double widen = 0;
+  for (double g : edge_gap) widen = std::max(widen, g);
+  for (int si : chosen) {
+    const Box3& sb = data.solids[static_cast<std::size_t>(si)].box;
+    for (int c = 0; c < 8; ++c)
+      grow(body.box, place_point(pl, {(c & 1) ? sb.max[0] : sb.min[0], (c & 2) ? sb.max[1] : sb.min[1], (c & 4) ? sb.max[2] : sb.min[2]}));
+  }
+  widen += 8 * kUnit * max_abs(body.box) + body.tolerance;
+  for (int d = 0; d < 3; ++d) body.box.min[d] -= widen, body.box.max[d] += widen;
   body.exact_volume = volume;
   if (any_trimmed) body.exact_area = stl::surface_area(body.mesh);
   return "";

@@ -257,10 +257,19 @@ TEST_F(Cli, MeshesEveryFormatAndCertifies) {
 // tetrahedron within the bound (exit 0), a report with the guard's figures, a file that
 // certify passes with the scene (fidelity within the reported collapse deviation), and the
 // same mesh (checksum) from the parallel mesher on one process with two partitions.
+// Also a scene of data/shapes/trimmed.step's three solids (faces with holes and curved
+// trims) in one entry: one inclusion per solid.
 TEST_F(Cli, Meshes3DScenesWithinTheBound) {
-  for (const std::string name : {"spheres3d", "stl3d", "nurbs3d", "step3d"}) {
+  std::ofstream(dir / "trimmed3d.json") << R"({"format": "cisamr-scene/1", "dimension": 3,
+    "domain": {"min": [0, 0, 0], "max": [1, 0.5, 0.5]}, "mesh": {"h": 0.05, "levels": 2},
+    "phases": [{"id": 1, "name": "matrix"}, {"id": 2, "name": "part"}],
+    "inclusions": [{"shape": "step", "file": ")" +
+                                              std::string(CISAMR_SOURCE_DIR) + R"(/data/shapes/trimmed.step",
+                    "scale": 0.1, "translate": [0.1013, 0.2487, 0.2521], "phase": 2}]})";
+  for (const std::string name : {"spheres3d", "stl3d", "nurbs3d", "step3d", "trimmed3d"}) {
     SCOPED_TRACE(name);
-    const std::string scene = std::string(CISAMR_SOURCE_DIR) + "/data/examples/" + name + ".json";
+    const std::string scene = name == "trimmed3d" ? (dir / "trimmed3d.json").string()
+                                                  : std::string(CISAMR_SOURCE_DIR) + "/data/examples/" + name + ".json";
     const std::string out = (dir / (name + ".vtu")).string();
     const fs::path report = dir / (name + ".report.json");
     const CommandResult r = run("mesh " + scene + " -o " + out + " --report " + report.string());
