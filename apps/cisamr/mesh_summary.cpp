@@ -41,6 +41,12 @@ void print_mesh_summary(std::FILE* out, const driver::MeshRun<Dim>& run, const d
         std::fprintf(out, "  %-10s %9.3f %9.3f %9.3f\n", s.name.c_str(), s.min, s.max, s.mean);
       else
         std::fprintf(out, "  %-10s %8.3f s\n", s.name.c_str(), s.max);
+    const double per_element = run.mesh.global_cells > 0 ? static_cast<double>(run.peak_rss_bytes.total) /
+                                                               static_cast<double>(run.mesh.global_cells)
+                                                         : 0.0;
+    std::fprintf(out, "  peak memory %.1f MiB (the largest rank's), %.0f bytes per %s (all ranks)\n",
+                 static_cast<double>(run.peak_rss_bytes.max) / (1024.0 * 1024.0), per_element,
+                 Dim == 2 ? "triangle" : "tetrahedron");
     if (run.distributed) {
       double max_load = 0, sum_load = 0;
       for (const auto& p : run.mesh.partitions) max_load = std::max(max_load, p.load), sum_load += p.load;

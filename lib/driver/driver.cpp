@@ -10,6 +10,7 @@
 #include <utility>
 
 #include "core/error.hpp"
+#include "core/memory.hpp"
 #include "geometry/oracle.hpp"
 #include "geometry/periodic.hpp"
 #include "io/mesh_io.hpp"
@@ -325,6 +326,8 @@ void finish(const Comm& comm, MeshRun<Dim>& run) {
       names.push_back(name);
   run.timings = parallel::spread_over_ranks(comm, run.mesh.times, names);
   run.total_seconds = run.timings.back().max;
+  const std::int64_t peak = peak_resident_bytes();  // meshing and writing are over
+  run.peak_rss_bytes = {-comm.allreduce_max(-peak), comm.allreduce_max(peak), comm.allreduce_sum(peak)};
 }
 
 template void write_outputs<2>(const Comm&, MeshRun<2>&, const Output&, const std::string&);

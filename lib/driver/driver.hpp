@@ -87,6 +87,7 @@ struct MeshRun {
   std::chrono::steady_clock::time_point start;
   std::vector<parallel::PhaseSpread> timings;  // per phase, over ranks (finish)
   double total_seconds = 0;                    // slowest rank (finish)
+  RankSpread peak_rss_bytes;                   // each rank's peak resident memory so far (finish)
 };
 
 // The box whose faces hold the mesh's boundary nodes, coordinate for coordinate: the

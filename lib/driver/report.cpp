@@ -75,6 +75,12 @@ std::string report(const MeshRun<Dim>& run, const std::string& scene_path, const
   for (const parallel::PhaseSpread& s : run.timings) timings[s.name] = {{"min", s.min}, {"max", s.max}, {"mean", s.mean}};
   j["timings_s"] = timings;
   j["total_s"] = run.total_seconds;
+  // Each process's maximum resident set size (VmHWM) at the end of the run, over ranks; per
+  // element: all ranks' together over the mesh's elements.
+  j["peak_rss_bytes"] = {{"min", run.peak_rss_bytes.min}, {"max", run.peak_rss_bytes.max},
+                         {"total", run.peak_rss_bytes.total}};
+  j["bytes_per_element"] =
+      m.global_cells > 0 ? static_cast<double>(run.peak_rss_bytes.total) / static_cast<double>(m.global_cells) : 0.0;
   j["ranks"] = run.ranks;
   nlohmann::json parts = nlohmann::json::array();
   for (const parallel::PartitionSummary& p : m.partitions) {

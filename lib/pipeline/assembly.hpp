@@ -22,7 +22,7 @@ struct MeshParts {
   std::vector<Vec<Dim>> extra_points;
   std::vector<NodeIdentity<Dim>> extra_identity;  // per extra point; empty: none is shared
   std::vector<std::int32_t> cells;  // Dim+1 node ids per cell, positively oriented
-  std::vector<std::int32_t> phase;  // phase index (into scene.phases) per cell
+  std::vector<std::uint8_t> phase;  // phase index (into scene.phases) per cell: a byte while the stages are alive
 };
 
 // The mesh: cells of void phases dropped, nodes renumbered in order of first use and unused

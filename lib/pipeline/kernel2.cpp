@@ -1,4 +1,5 @@
 // The 2D kernel: SAMR → r-adaptivity → subdivision, then the shared assembly.
+#include "core/memory.hpp"
 #include "pipeline/assembly.hpp"
 #include "radapt/radapt2.hpp"
 #include "samr/samr2.hpp"
@@ -15,6 +16,9 @@ MeshParts<2> run_stages(const geometry::Oracle2& oracle, const grid::Lattice2& l
     ScopedPhase timer(&result.times, "samr");
     return samr::refine2(oracle, lattice, ghosted_range(lattice, box, ghost), levels, options.progress);
   }();
+  // As in 3D (kernel3.cpp): freed working state back to the system after each stage.
+  grid.release_lists();
+  release_free_memory();
   counters.coarse_cells = grid.forest.root_count();
   counters.refinements = grid.refinements;
   counters.leaves = static_cast<std::int64_t>(grid.forest.size()) - grid.refinements;
@@ -23,6 +27,7 @@ MeshParts<2> run_stages(const geometry::Oracle2& oracle, const grid::Lattice2& l
     ScopedPhase timer(&result.times, "radapt");
     return radapt::snap2(oracle, grid, radapt::Options{.alpha = options.alpha, .progress = options.progress});
   }();
+  release_free_memory();
   counters.lattice_nodes = static_cast<std::int64_t>(nodes.key.size());
   counters.snapped_nodes = nodes.snapped_count;
 

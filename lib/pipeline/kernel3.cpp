@@ -1,5 +1,6 @@
 // The 3D kernel: SAMR → r-adaptivity with the quality guard → face swapping →
 // subdivision, then the shared assembly.
+#include "core/memory.hpp"
 #include "faceswap/faceswap3.hpp"
 #include "pipeline/assembly.hpp"
 #include "radapt/radapt3.hpp"
@@ -19,6 +20,11 @@ MeshParts<3> run_stages(const geometry::Oracle3& oracle, const grid::Lattice3& l
     ScopedPhase timer(&result.times, "samr");
     return samr::refine3(oracle, lattice, range, levels, options.progress);
   }();
+  // After each stage: what it freed goes back to the system (hash-map nodes would stay
+  // resident in the heap, under the next stage's arrays), and the forest keeps only what
+  // the later stages read (validation/bench/MEMORY.md).
+  grid.release_lists();
+  release_free_memory();
   counters.coarse_cells = range.count(0) * range.count(1) * range.count(2);
   counters.refinements = grid.refinements;
   counters.samr_sweeps = grid.sweeps;
@@ -33,6 +39,7 @@ MeshParts<3> run_stages(const geometry::Oracle3& oracle, const grid::Lattice3& l
                                           .bound = options.bound3,
                                           .progress = options.progress});
   }();
+  release_free_memory();
   counters.lattice_nodes = static_cast<std::int64_t>(nodes.key.size());
   counters.snapped_nodes = nodes.snapped_count;
   counters.refused_nodes = nodes.refused_count;
@@ -47,6 +54,7 @@ MeshParts<3> run_stages(const geometry::Oracle3& oracle, const grid::Lattice3& l
     ScopedPhase timer(&result.times, "faceswap");
     return faceswap::swap3(oracle, grid, nodes, faceswap::Options3{.trigger = options.swap_trigger3, .progress = options.progress});
   }();
+  release_free_memory();
   counters.face_swaps = swaps.swaps;
 
   subdivide::Tets3 tets = [&] {

@@ -106,13 +106,14 @@ void assemble(const geometry::SceneDesc& scene, MeshParts<Dim>&& parts, int part
       if (id < 0) id = next++;
       parts.cells[corners * kept + k] = id;
     }
-    parts.phase[kept++] = phase.id;
+    parts.phase[kept++] = parts.phase[c];
   }
   parts.cells.resize(corners * kept);
-  parts.phase.resize(kept);
   mesh::SimplexMesh<Dim>& m = result.mesh;
   m.cell_nodes = std::move(parts.cells);
-  m.cell_phase = std::move(parts.phase);
+  m.cell_phase.resize(kept);
+  for (std::size_t c = 0; c < kept; ++c) m.cell_phase[c] = scene.phases[parts.phase[c]].id;
+  std::vector<std::uint8_t>().swap(parts.phase);
   const auto nodes = static_cast<std::size_t>(next);
   m.coords.resize(Dim * nodes);
   result.node_identity.resize(nodes);

@@ -28,9 +28,16 @@ Nodes2 snap2(const geometry::Oracle2& oracle, const samr::RefinedGrid2& g, const
     r.period_x = lattice.periodic[0] ? lattice.coarse_cells[0] : 0;
     r.period_y = lattice.periodic[1] ? lattice.coarse_cells[1] : 0;
     r.coarse.assign(static_cast<std::size_t>((r.nx + 1) * (r.ny + 1)), -1);
-    r.fine = grid::KeyMap(forest.size() - static_cast<std::size_t>(forest.root_count()) + 16);
+    // A refinement adds four cells and about three nodes off the coarse lattice (the centre,
+    // four edge midpoints shared with the neighbours).
+    r.fine = grid::LatticeKeyIndex((forest.size() - static_cast<std::size_t>(forest.root_count())) / 8 * 7 + 16);
   }
-  nodes.key.reserve(forest.size());
+  // At most one node per cell (a corner of the leaves, a few more along the domain's
+  // faces): reserved, the arrays never grow by copying; capacity never written costs no
+  // memory.
+  nodes.key.reserve(forest.size() + static_cast<std::size_t>(forest.root_count()) + 16);
+  nodes.position.reserve(nodes.key.capacity());
+  nodes.mask.reserve(nodes.key.capacity());
 
   const auto add_node = [&](std::int64_t x, std::int64_t y) -> std::int32_t {
     x = lattice.canonical(0, x), y = lattice.canonical(1, y);
@@ -42,7 +49,7 @@ Nodes2 snap2(const geometry::Oracle2& oracle, const samr::RefinedGrid2& g, const
       if (inserted) *slot = next;
       id = *slot;
     } else {
-      id = nodes.registry.fine.insert(grid::key2(x, y), next, inserted);
+      id = nodes.registry.fine.insert(grid::key2(x, y), next, nodes.key, inserted);
     }
     if (inserted) {
       nodes.key.push_back(grid::key2(x, y));

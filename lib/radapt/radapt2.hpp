@@ -37,15 +37,15 @@ struct Nodes2 {
   // forest cell; saves the hash lookups of later phases.
   std::vector<std::array<std::int32_t, 4>> cell_corners;
 
-  // Node registry: nodes on the coarse lattice (most of them) by direct index, the others
-  // (created by SAMR) in a hash map.
+  // Node registry: nodes on the coarse lattice by direct index, the others (created by
+  // SAMR) in a hash index over `key`.
   // Keys are canonical (lattice.hpp): on a periodic axis a point and its images across the
   // period are one node, registered at its coordinate in [0, P).
   struct Registry {
     std::int64_t x0 = 0, y0 = 0, nx = 0, ny = 0, unit = 1;  // coarse node range, fine units per cell
     std::int64_t period_x = 0, period_y = 0;                 // coarse cells per period (0: not periodic)
     std::vector<std::int32_t> coarse;                        // (nx+1)·(ny+1), -1 = none
-    grid::KeyMap fine{1024};
+    grid::LatticeKeyIndex fine{1024};
 
     // The window offset of canonical coarse node c along an axis starting at c0.
     static std::int64_t offset(std::int64_t c, std::int64_t c0, std::int64_t period) {
@@ -66,7 +66,7 @@ struct Nodes2 {
   std::int32_t id(std::int64_t x, std::int64_t y) const {
     x = lattice.canonical(0, x), y = lattice.canonical(1, y);
     if (const std::int32_t* slot = registry.coarse_slot(x, y)) return *slot;
-    return registry.fine.find(grid::key2(x, y));
+    return registry.fine.find(grid::key2(x, y), key);
   }
   std::int32_t id(grid::LatticeKey k) const { return id(grid::key2_x(k), grid::key2_y(k)); }
   grid::Lattice2 lattice;  // the forest's: which axes wrap

@@ -10,6 +10,7 @@
 #include <utility>
 
 #include "core/check.hpp"
+#include "core/memory.hpp"
 #include "grid/cut_stencil3.hpp"
 #include "mesh/metrics.hpp"
 
@@ -35,11 +36,10 @@ struct Option {
 // A snap candidate before the options are assembled.
 struct Candidate {
   std::int32_t node = 0;
+  std::int32_t edge = 0;   // the phase-changing edge it snaps along (its position, mask)
   double distance = 0;     // length of the move
   double fraction = 0;     // of its edge's length
   LatticeKey3 other = 0;   // the edge's other end: a fixed tie-break
-  Vec3 position{};
-  PhaseMask mask = 0;
 };
 
 // Crossings of one phase-changing edge nearest each end, for snap candidates.
@@ -68,6 +68,7 @@ class Snapper {
   Nodes3 run() {
     register_nodes();
     find_edges();
+    release_free_memory();  // the edge search's hash map
     build_options();
     if (options_.bound > 0) guard();
     apply();
@@ -82,7 +83,6 @@ class Snapper {
   const grid::Lattice3& lattice_;
   const Options3 options_;
   Nodes3 nodes_;
-  std::vector<LatticePoint3> point_;  // lattice point per node
   std::vector<EdgeEnds> ends_;        // per edge of nodes_.edges
   // Options per node (CSR); nodes without a phase change nearby have none (they stay).
   std::vector<std::int32_t> option_begin_;
@@ -112,7 +112,15 @@ class Snapper {
   // 1. Vertices of every leaf and their closure masks. A leaf that no boundary meets lies
   //    inside one phase, so its vertices take that phase without asking the oracle per vertex.
   void register_nodes() {
-    nodes_.registry = grid::KeyMap(forest_.size() / 2 + 16);
+    // About one node per four forest tets (five tets per cube at level 0, fewer with
+    // refinement): sized for that, the registry and the per-node arrays never grow by
+    // copying at the mesher's peak, and capacity never touched costs no memory.
+    const std::size_t expected_nodes = forest_.size() / 4 + 16;
+    nodes_.registry = grid::LatticeKeyIndex(expected_nodes);
+    nodes_.key.reserve(expected_nodes);
+    nodes_.position.reserve(expected_nodes);
+    nodes_.mask.reserve(expected_nodes);
+    nodes_.finest_level.reserve(expected_nodes);
     nodes_.tet_nodes.resize(forest_.size());
     const PhaseMask matrix_bit = PhaseMask{1} << oracle_.matrix_phase();
     for (std::int32_t t = 0; t < static_cast<std::int32_t>(forest_.size()); ++t) {
@@ -133,7 +141,7 @@ class Snapper {
           const Vec3& p = nodes_.position[static_cast<std::size_t>(id)];
           // A node on a periodic plane is a vertex of leaves on both sides of the period,
           // whose candidate lists hold the geometry in different frames: ask for its own.
-          if (on_periodic_plane(point_[static_cast<std::size_t>(id)])) {
+          if (lattice_.any_periodic() && on_periodic_plane(grid::key3_point(nodes_.key[static_cast<std::size_t>(id)]))) {
             oracle_.candidates(Box3{p, p}, plane_candidates_);
             nodes_.mask[static_cast<std::size_t>(id)] = oracle_.closure_phases(p, plane_candidates_);
           } else {
@@ -180,13 +188,12 @@ class Snapper {
     const auto next = static_cast<std::int32_t>(nodes_.key.size());
     const LatticePoint3 p = lattice_.canonical_point(frame);
     const LatticeKey3 k = grid::key3(p);
-    const std::int32_t id = nodes_.registry.insert(k, next, inserted);
+    const std::int32_t id = nodes_.registry.insert(k, next, nodes_.key, inserted);
     if (inserted) {
       nodes_.key.push_back(k);
       nodes_.position.push_back(forest_.position(p));
       nodes_.mask.push_back(0);
       nodes_.finest_level.push_back(0);
-      point_.push_back(p);
     }
     return id;
   }
@@ -195,7 +202,7 @@ class Snapper {
   //    crossings of each, once, on the segment oriented from the smaller key.
   void find_edges() {
     nodes_.cut_leaf_slot.assign(forest_.size(), -1);
-    EdgeIndex& index = nodes_.edge_index;
+    EdgeIndex index;  // (lo, hi) → index into nodes_.edges, while they are found
     for (std::int32_t t = 0; t < static_cast<std::int32_t>(forest_.size()); ++t) {
       tet_done(1, t);
       if (!forest_.is_leaf(t) || !g_.is_cut(t)) continue;
@@ -218,6 +225,12 @@ class Snapper {
       nodes_.cut_leaf_slot[static_cast<std::size_t>(t)] = static_cast<std::int32_t>(nodes_.leaf_edges.size());
       nodes_.leaf_edges.push_back(slots);
     }
+    nodes_.edge_order.resize(nodes_.edges.size());
+    for (std::size_t e = 0; e < nodes_.edges.size(); ++e) nodes_.edge_order[e] = static_cast<std::int32_t>(e);
+    std::ranges::sort(nodes_.edge_order, [&](std::int32_t x, std::int32_t y) {
+      const EdgeCut &a = nodes_.edges[static_cast<std::size_t>(x)], &b = nodes_.edges[static_cast<std::size_t>(y)];
+      return std::pair{a.lo, a.hi} < std::pair{b.lo, b.hi};
+    });
   }
 
   // The crossings of the edge from node `lo` to node `hi`, in the edge's frame (its ends
@@ -333,13 +346,10 @@ class Snapper {
         if (!slides_within_domain(side == 0 ? geo.qa : geo.qb, side == 0 ? geo.qb : geo.qa)) continue;
         Candidate c;
         c.node = v;
+        c.edge = static_cast<std::int32_t>(e);
         c.fraction = fraction;
         c.distance = fraction * geo.length;
         c.other = nodes_.key[uw];
-        const Vec3 &pa = geo.pa, &pb = geo.pb;
-        const double t = side == 0 ? ends.t_front : ends.t_back;
-        for (int d = 0; d < 3; ++d) c.position[d] = pa[d] + t * (pb[d] - pa[d]);
-        c.mask = side == 0 ? ends.mask_front : ends.mask_back;
         candidates.push_back(c);
       }
     }
@@ -348,15 +358,25 @@ class Snapper {
       if (a.distance != b.distance) return a.distance < b.distance;
       return a.other < b.other;
     });
+    // Options per node: counted first, so that the table is allocated once at its size (it is
+    // alive at the mesher's peak).
     option_begin_.assign(n + 1, 0);
+    {
+      std::size_t c = 0;
+      for (std::size_t v = 0; v < n; ++v) {
+        std::int32_t count = 0;
+        for (; c < candidates.size() && candidates[c].node == static_cast<std::int32_t>(v); ++c) ++count;
+        option_begin_[v + 1] = option_begin_[v] + std::min(count, options_.max_candidates) + (collapse_mask_[v] != 0 ? 2 : 0);
+      }
+    }
+    option_.reserve(static_cast<std::size_t>(option_begin_[n]));
     std::size_t c = 0;
     for (std::size_t v = 0; v < n; ++v) {
-      option_begin_[v] = static_cast<std::int32_t>(option_.size());
       int kept = 0;
       for (; c < candidates.size() && candidates[c].node == static_cast<std::int32_t>(v); ++c) {
         if (kept >= options_.max_candidates) continue;
         ++kept;
-        option_.push_back({candidates[c].position, candidates[c].mask, 1.0 + candidates[c].fraction, OptionKind::snap});
+        option_.push_back(snap_option(candidates[c]));
       }
       if (collapse_mask_[v] == 0) continue;  // no phase change at this node
       const double near = nearest[v];
@@ -364,8 +384,24 @@ class Snapper {
                          OptionKind::stay});
       option_.push_back({nodes_.position[v], nodes_.mask[v] | collapse_mask_[v], 0.0, OptionKind::collapse});
     }
-    option_begin_[n] = static_cast<std::int32_t>(option_.size());
+    CISAMR_CHECK(option_.size() == static_cast<std::size_t>(option_begin_[n]), "radapt3: options miscounted");
     refused_.assign(option_.size(), 0);
+  }
+
+  // The snap of candidate `c`: onto its edge's crossing nearest its node, in the edge's frame.
+  Option snap_option(const Candidate& c) const {
+    const EdgeCut& cut = nodes_.edges[static_cast<std::size_t>(c.edge)];
+    const EdgeEnds& ends = ends_[static_cast<std::size_t>(c.edge)];
+    const std::int32_t lo = nodes_.id(canonical_key(lattice_, cut.lo)), hi = nodes_.id(canonical_key(lattice_, cut.hi));
+    const EdgeGeometry geo = edge_geometry(cut, lo, hi);
+    const bool front = c.node == lo;
+    const double t = front ? ends.t_front : ends.t_back;
+    Option o;
+    for (int d = 0; d < 3; ++d) o.position[d] = geo.pa[d] + t * (geo.pb[d] - geo.pa[d]);
+    o.mask = front ? ends.mask_front : ends.mask_back;
+    o.score = 1.0 + c.fraction;
+    o.kind = OptionKind::snap;
+    return o;
   }
 
   // 4. The guard, leaf by leaf (see the header).

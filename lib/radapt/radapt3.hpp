@@ -127,12 +127,15 @@ struct Nodes3 {
   // Node ids of each leaf's vertices (fine_vertices order), indexed by forest tet;
   // unspecified for non-leaves.
   std::vector<std::array<std::int32_t, 4>> tet_nodes;
-  grid::KeyMap registry{1024};
+  grid::LatticeKeyIndex registry{1024};  // lattice key → node id, over `key`
 
   // Phase-changing edges of cut leaves, and per cut leaf its six edges' indices into
   // `edges` (-1: no phase change). `cut_leaf_slot[t]` indexes `leaf_edges` (-1: not cut).
   std::vector<EdgeCut> edges;
-  EdgeIndex edge_index;  // (lo, hi) → index into `edges`
+  // Indices into `edges` in ascending (lo, hi): edge() by binary search. (A hash map of the
+  // pairs held 60 bytes per edge at the mesher's peak; the look-ups are few: new edges of
+  // face swaps and closures, the cut leaves read their edges from leaf_edges.)
+  std::vector<std::int32_t> edge_order;
   std::vector<std::int32_t> cut_leaf_slot;
   std::vector<std::array<std::int32_t, 6>> leaf_edges;
 
@@ -145,12 +148,18 @@ struct Nodes3 {
   std::int64_t combinations = 0;         // combinations checked
   double max_collapse_deviation = 0;     // largest distance of a collapsed node (or cut point) from a phase it serves
 
-  std::int32_t id(grid::LatticeKey3 k) const { return registry.find(k); }
+  std::int32_t id(grid::LatticeKey3 k) const { return registry.find(k, key); }
   // The phase-changing edge between two lattice keys (either order; an edge's frame keys on
   // a periodic lattice), or -1.
   std::int32_t edge(grid::LatticeKey3 a, grid::LatticeKey3 b) const {
-    const auto it = edge_index.find(a < b ? std::pair{a, b} : std::pair{b, a});
-    return it == edge_index.end() ? -1 : it->second;
+    const std::pair<grid::LatticeKey3, grid::LatticeKey3> k = a < b ? std::pair{a, b} : std::pair{b, a};
+    const auto ends = [&](std::int32_t e) {
+      const EdgeCut& c = edges[static_cast<std::size_t>(e)];
+      return std::pair{c.lo, c.hi};
+    };
+    const auto it = std::lower_bound(edge_order.begin(), edge_order.end(), k,
+                                     [&](std::int32_t e, const auto& key) { return ends(e) < key; });
+    return it != edge_order.end() && ends(*it) == k ? *it : -1;
   }
   bool moved(std::int32_t n) const { return state[static_cast<std::size_t>(n)] == NodeState::snapped; }
   // Could leaf `t` (level `level`, vertices `ids`) carry a node at one of its edge midpoints?

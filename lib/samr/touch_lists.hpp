@@ -14,10 +14,17 @@ struct TouchLists {
   std::vector<std::uint16_t> touch_count;
   std::vector<std::int32_t> touch_pool;
 
+  // Not after release_lists().
   std::span<const std::int32_t> touched(std::int32_t c) const {
     return {touch_pool.data() + touch_begin[static_cast<std::size_t>(c)], touch_count[static_cast<std::size_t>(c)]};
   }
   bool is_cut(std::int32_t c) const { return touch_count[static_cast<std::size_t>(c)] > 0; }
+  // After refinement the later stages ask only whether a cell is cut: the lists go (a sixth
+  // of the 3D mesher's peak memory, validation/bench/MEMORY.md), the counts stay.
+  void release_lists() {
+    std::vector<std::int32_t>().swap(touch_begin);
+    std::vector<std::int32_t>().swap(touch_pool);
+  }
 };
 
 // Per coarse cell of the range (2D: the forest's roots; 3D: the cubes, x fastest): the

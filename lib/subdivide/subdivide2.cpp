@@ -56,6 +56,12 @@ class Subdivider {
 
   Triangles2 run(const grid::CellRange<2>& owned, Progress* progress) {
     const auto cells = static_cast<std::int64_t>(forest_.size());
+    // About two triangles per leaf, more at hanging midpoints and cuts: reserved with room
+    // to spare, the arrays do not grow by copying while the forest and the nodes are alive
+    // (the mesher's peak), and capacity never written costs no memory.
+    const std::size_t most = forest_.size() * 5 / 2 + 16;
+    out_.triangles.reserve(3 * most);
+    out_.phase.reserve(most);
     for (std::int32_t c = 0; c < static_cast<std::int32_t>(forest_.size()); ++c) {
       advance_sometimes(progress, c, cells);
       if (!forest_.is_leaf(c)) continue;
@@ -112,7 +118,7 @@ class Subdivider {
   void emit(const QuadPoints& q, int a, int b, int c, int phase) {
     out_.triangles.insert(out_.triangles.end(), {output_id(q.id[a], q.shift[a]), output_id(q.id[b], q.shift[b]),
                                                  output_id(q.id[c], q.shift[c])});
-    out_.phase.push_back(phase);
+    out_.phase.push_back(static_cast<std::uint8_t>(phase));
   }
 
   void leaf(std::int32_t c) {

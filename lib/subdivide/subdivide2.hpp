@@ -27,7 +27,7 @@ struct Triangles2 {
   std::vector<std::uint64_t> extra_identity;
   static constexpr std::uint64_t kNoKey = ~std::uint64_t{0};
   std::vector<std::int32_t> triangles;  // 3 node ids per triangle, counter-clockwise
-  std::vector<std::int32_t> phase;      // phase index per triangle
+  std::vector<std::uint8_t> phase;      // phase index per triangle (at most 64 phases: PhaseMask)
   std::int64_t cut_quads = 0, double_diagonal = 0, hanging_cells = 0;
   std::int64_t unresolved = 0;          // quads no template could split phase-consistently
   std::vector<Vec2> unresolved_at;      // centres of the first few unresolved quads

@@ -26,6 +26,12 @@ class Subdivider3 {
 
   Tets3 run(const grid::CellRange<3>& owned, Progress* progress) {
     const auto tets = static_cast<std::int64_t>(forest_.size());
+    // More than the output can hold (a leaf gives one tet, a cut leaf at most a few): the
+    // arrays then never grow by copying while the forest and the node tables are alive (the
+    // mesher's peak), and capacity never written costs no memory.
+    const std::size_t most = forest_.size() + 6 * nodes_.leaf_edges.size();
+    out_.tets.reserve(4 * most);
+    out_.phase.reserve(most);
     for (std::int32_t t = 0; t < static_cast<std::int32_t>(forest_.size()); ++t) {
       advance_sometimes(progress, t, tets);
       if (!forest_.is_leaf(t)) continue;
@@ -115,7 +121,7 @@ class Subdivider3 {
   // the tables give: no need to measure it.
   void emit(const std::array<std::int32_t, 4>& v, int phase, Origin origin, double known = -1) {
     out_.tets.insert(out_.tets.end(), v.begin(), v.end());
-    out_.phase.push_back(phase);
+    out_.phase.push_back(static_cast<std::uint8_t>(phase));
     if (known >= 0) {
       if (origin == Origin::closure) out_.worst_closure = std::max(out_.worst_closure, known);
       if (origin == Origin::kept) out_.worst_kept = std::max(out_.worst_kept, known);

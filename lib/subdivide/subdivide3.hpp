@@ -35,7 +35,7 @@ struct Tets3 {
   std::vector<std::array<grid::LatticeKey3, 2>> extra_identity;
   static constexpr grid::LatticeKey3 kInteriorPoint = ~grid::LatticeKey3{0};
   std::vector<std::int32_t> tets;       // 4 node ids per tet, positively oriented
-  std::vector<std::int32_t> phase;      // phase index per tet
+  std::vector<std::uint8_t> phase;      // phase index per tet (at most 64 phases: PhaseMask)
   std::int64_t cut_tets = 0;            // leaves split along an interface
   std::int64_t cut_nodes = 0;           // nodes created on cut edges
   std::int64_t closed_tets = 0;         // leaves closed by the hanging-midpoint tables

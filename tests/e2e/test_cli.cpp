@@ -241,6 +241,14 @@ TEST_F(Cli, MeshesEveryFormatAndCertifies) {
   const std::string text((std::istreambuf_iterator<char>(report)), std::istreambuf_iterator<char>());
   EXPECT_NE(text.find("\"aspect_ratio\""), std::string::npos);
   EXPECT_NE(text.find("\"timings_s\""), std::string::npos);
+  {  // the process's peak memory: one rank, so min = max = total, and per element
+    const nlohmann::json j = nlohmann::json::parse(text);
+    const std::int64_t peak = j["peak_rss_bytes"]["max"];
+    EXPECT_GT(peak, 1 << 20);
+    EXPECT_EQ(j["peak_rss_bytes"]["min"], peak);
+    EXPECT_EQ(j["peak_rss_bytes"]["total"], peak);
+    EXPECT_DOUBLE_EQ(j["bytes_per_element"].get<double>(), static_cast<double>(peak) / j["elements"].get<double>());
+  }
   EXPECT_TRUE(fs::exists(dir / "r.svg"));
   // A bound the mesh cannot meet: the mesh is written, the exit code says 3.
   const CommandResult strict = run("mesh " + scene + " -o " + (dir / "s.vtu").string() + " --bound 1.01 --quiet");

@@ -81,6 +81,29 @@ TEST(KeyMap, MatchesUnorderedMap) {
   EXPECT_EQ(map.find(key2(6000, 1)), KeyMap::kNone);
 }
 
+// The registry over the caller's keys: the same answers as a map, through several growths
+// (started far too small), with keys that collide in the low bits.
+TEST(KeyIndex, MatchesUnorderedMapOverTheCallersKeys) {
+  std::mt19937_64 rng(5);
+  LatticeKeyIndex index(4);
+  std::vector<std::uint64_t> keys;
+  std::unordered_map<std::uint64_t, std::int32_t> ref;
+  for (int i = 0; i < 100000; ++i) {
+    const std::uint64_t key = key2(static_cast<std::int64_t>(rng() % 4000), static_cast<std::int64_t>(rng() % 64) * 1024);
+    bool inserted = false;
+    const auto next = static_cast<std::int32_t>(keys.size());
+    const std::int32_t v = index.insert(key, next, keys, inserted);
+    if (inserted) keys.push_back(key);
+    auto [it, fresh] = ref.emplace(key, next);
+    EXPECT_EQ(inserted, fresh);
+    EXPECT_EQ(v, it->second);
+  }
+  EXPECT_EQ(index.size(), ref.size());
+  EXPECT_EQ(keys.size(), ref.size());
+  for (const auto& [k, v] : ref) EXPECT_EQ(index.find(k, keys), v);
+  EXPECT_EQ(index.find(key2(5000, 1), keys), LatticeKeyIndex::kNone);
+}
+
 TEST(Lattice, KeysRoundTrip) {
   const LatticeKey k = key2(123456, 7890123);
   EXPECT_EQ(key2_x(k), 123456);

@@ -243,5 +243,38 @@ TEST(Snap3, OrderFree) {
   EXPECT_EQ(first.nodes.collapsed_count, reversed.nodes.collapsed_count);
 }
 
+// The node and edge look-ups the later stages use: every node by its key, every
+// phase-changing edge by its keys in either order (the same index as the cut leaves'
+// slots), and -1 for pairs that are no such edge.
+TEST(Snap3, NodesAndEdgesFoundByTheirKeys) {
+  SceneDesc scene = testing::box_scene(3, {0, 0, 0}, {1, 1, 1}, 0.25, 1);
+  scene.inclusions = {{geometry::Sphere{{0.31, 0.36, 0.42}, 0.19}, 2, 1},
+                      {geometry::Sphere{{0.69, 0.62, 0.58}, 0.21}, 2, 1}};
+  const Snapped3 s(scene, radapt::Options3{});
+  for (std::size_t n = 0; n < s.nodes.key.size(); ++n) EXPECT_EQ(s.nodes.id(s.nodes.key[n]), static_cast<std::int32_t>(n));
+  ASSERT_GT(s.nodes.edges.size(), 100u);
+  for (std::size_t e = 0; e < s.nodes.edges.size(); ++e) {
+    const radapt::EdgeCut& c = s.nodes.edges[e];
+    EXPECT_EQ(s.nodes.edge(c.lo, c.hi), static_cast<std::int32_t>(e));
+    EXPECT_EQ(s.nodes.edge(c.hi, c.lo), static_cast<std::int32_t>(e));
+    EXPECT_EQ(s.nodes.edge(c.lo, c.lo), -1);
+  }
+  std::size_t slots = 0;
+  for (std::int32_t t = 0; t < static_cast<std::int32_t>(s.grid.forest.size()); ++t) {
+    const auto* edges = s.nodes.edges_of(t);
+    if (edges == nullptr) continue;
+    const auto& ids = s.nodes.tet_nodes[static_cast<std::size_t>(t)];
+    for (int e = 0; e < 6; ++e) {
+      const std::int32_t slot = (*edges)[static_cast<std::size_t>(e)];
+      const grid::LatticeKey3 a = s.nodes.key[static_cast<std::size_t>(ids[tet::kEdges[e][0]])];
+      const grid::LatticeKey3 b = s.nodes.key[static_cast<std::size_t>(ids[tet::kEdges[e][1]])];
+      EXPECT_EQ(s.nodes.edge(a, b), slot);
+      slots += slot >= 0 ? 1 : 0;
+    }
+  }
+  EXPECT_GE(slots, s.nodes.edges.size());
+  EXPECT_EQ(s.nodes.id(grid::key3(1000000, 1000000, 1000000)), -1);  // beyond the lattice
+}
+
 }  // namespace
 }  // namespace cisamr

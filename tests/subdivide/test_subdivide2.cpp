@@ -32,7 +32,7 @@ Soup2 subdivide(const testing::Stage2& s, const grid::CellRange<2>& owned) {
   out.points = s.nodes.position;
   out.points.insert(out.points.end(), t.extra_points.begin(), t.extra_points.end());
   out.triangles = t.triangles;
-  out.phase = t.phase;
+  out.phase.assign(t.phase.begin(), t.phase.end());
   return out;
 }
 

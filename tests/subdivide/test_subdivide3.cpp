@@ -40,7 +40,7 @@ Soup3 subdivide(const testing::Stage3& s, const grid::CellRange<3>& owned, const
   for (grid::LatticeKey3 k : s.nodes.key) out.identity.push_back({k, k});
   out.identity.insert(out.identity.end(), t.extra_identity.begin(), t.extra_identity.end());
   out.tets = t.tets;
-  out.phase = t.phase;
+  out.phase.assign(t.phase.begin(), t.phase.end());
   return out;
 }
 
