@@ -2,6 +2,7 @@
 // parallel mesher with --partitions N or under mpiexec), writes, prints (mesh_summary.cpp).
 // Every rank runs all of this; only rank 0 prints and writes the report.
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 #include <optional>
 #include <string>
@@ -26,6 +27,7 @@ struct MeshArgs {
   std::string svg_axis = "z";
   std::optional<double> svg_at;
   bool gather = false;
+  bool stream = false;  // write .pvtu pieces while meshing (parallel/stream.hpp)
   bool fixed_ghost = false;  // the fixed 3-cell inclusion margin instead of the level-aware one
   std::optional<double> explode;  // --explode F: the regions of the written .vtu moved apart
   driver::Options options;
@@ -41,6 +43,18 @@ void check_explode(const MeshArgs& args, const driver::Output& output) {
     throw InputError("--explode", "", "needs --cohesive: it moves the phase regions apart to show the cohesive cells");
   if (output.pieces || (output.format ? *output.format : io::mesh_format_of(output.path)) != io::MeshFormat::vtu)
     throw InputError("--explode", "", "writes one .vtu file: give -o NAME.vtu (with --gather in a parallel run)");
+}
+
+constexpr int kStreamedPartitionsPerRank = 8;
+
+// --stream writes .pvtu pieces as partitions finish: no one file, no picture of the whole.
+void check_stream(const MeshArgs& args) {
+  if (args.gather) throw InputError("--stream", "", "writes .pvtu pieces as the partitions finish; drop --gather");
+  if (!args.svg.empty())
+    throw InputError("--stream", "", "--svg draws the whole mesh, which a streamed run never holds; drop one of them");
+  const std::string extension = std::filesystem::path(args.output).extension().string();
+  if (!args.format.empty() || extension != ".pvtu")
+    throw InputError(args.output, "", "--stream writes .pvtu pieces: name the output NAME.pvtu");
 }
 
 void run_mesh(MeshArgs& args, const GlobalFlags& flags, int& exit_code) {
@@ -62,10 +76,17 @@ void run_mesh(MeshArgs& args, const GlobalFlags& flags, int& exit_code) {
     ranks = std::make_unique<parallel::RankProgress>(comm, progress.get());
   }
   options.progress = ranks.get();
+  if (args.stream) {
+    parallel::run_collectively(comm, [&] { check_stream(args); });
+    // Eight partitions per rank unless told: each rank then holds an eighth of its share.
+    if (options.partitions == 0) options.partitions = kStreamedPartitionsPerRank * comm.size();
+  }
   // Fail on a bad output name before any work.
   driver::Output output =
       driver::plan_output(comm, args.output, args.gather, driver::is_distributed(comm, options), args.format,
-                          args.plane == "strain" ? io::PlaneKind::strain : io::PlaneKind::stress);
+                          args.plane == "strain" ? io::PlaneKind::strain : io::PlaneKind::stress,
+                          args.stream ? options.partitions : 0);
+  if (args.stream) options.stream = output.path;
   if (options.pipeline.cohesive)
     parallel::run_collectively(comm, [&] {
       if (!output.pieces && (output.format ? *output.format : io::mesh_format_of(output.path)) == io::MeshFormat::medit)
@@ -73,10 +94,12 @@ void run_mesh(MeshArgs& args, const GlobalFlags& flags, int& exit_code) {
     });
   parallel::run_collectively(comm, [&] { check_explode(args, output); });
   output.explode = args.explode.value_or(0);
+  // The mesh (a streamed run writes its pieces while meshing), the picture and the report,
+  // or none of them.
+  io::OutputSet outputs;
   auto meshed = driver::mesh_scene(comm, args.scene, options);
   std::visit(
       [&](auto& run) {
-        io::OutputSet outputs;  // the mesh, its pieces, the picture and the report, or none of them
         driver::write_outputs(comm, run, output, args.svg);
         driver::finish(comm, run);
         if (!args.report.empty())
@@ -147,6 +170,9 @@ void add_mesh_command(CLI::App& app, GlobalFlags& flags, int& exit_code) {
                   "With --cohesive and a .vtu output: move each phase region away from the domain centre by (F-1) "
                   "times its centroid's offset, so that the cohesive cells show (for viewing only)")
       ->check(number_in(1, 1e6));
+  cmd->add_flag("--stream", args->stream,
+                "Write the mesh while meshing, partition by partition (.pvtu, one piece per partition, global "
+                "node ids), holding one partition per rank at a time (default --partitions: 8 per rank)");
   cmd->add_flag("--gather", args->gather,
                 "Parallel run: write one file on rank 0 (any format) instead of .pvtu pieces");
   cmd->add_flag("--fixed-ghost", args->fixed_ghost,

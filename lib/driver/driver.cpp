@@ -23,6 +23,7 @@
 #include "parallel/collective.hpp"
 #include "parallel/merge.hpp"
 #include "parallel/periodic_masters.hpp"
+#include "parallel/stream.hpp"
 
 namespace cisamr::driver {
 namespace {
@@ -43,7 +44,13 @@ template <int Dim>
 void check_request(const geometry::SceneDesc& scene, const Options& options) {
   const pipeline::MeshEstimate estimate = pipeline::estimate_mesh<Dim>(scene);
   const double memory = static_cast<double>(sysconf(_SC_PHYS_PAGES)) * static_cast<double>(sysconf(_SC_PAGE_SIZE));
-  const double limit = options.max_elements > 0 ? options.max_elements : memory / kBytesPerElement;
+  // Streamed, a rank holds one partition at a time (its ghost included).
+  const double streamed_share =
+      options.stream.empty() || options.partitions <= 0
+          ? 1.0
+          : std::min(1.0, kStreamedPartitionsInFlight / static_cast<double>(options.partitions));
+  const double limit =
+      options.max_elements > 0 ? options.max_elements : memory / kBytesPerElement / streamed_share;
   if (estimate.total() > limit) {
     std::string field = "mesh.h";
     if (estimate.background <= limit && estimate.largest_inclusion >= 0) {
@@ -114,11 +121,11 @@ void mesh_sequential(const Comm& comm, const geometry::SceneDesc& scene, MeshRun
   m.times = std::move(result.times);
 }
 
-// Elements and measure per phase (in `phases` order) over every rank's cells.
+// Adds the elements and measure per phase (in `phases` order) of `piece`'s cells.
 template <int Dim>
-std::vector<PhaseFigures> phase_figures(const Comm& comm, const mesh::SimplexMesh<Dim>& piece,
-                                        const std::vector<geometry::Phase>& phases) {
-  std::vector<PhaseFigures> figures(phases.size());
+void add_phase_figures(const mesh::SimplexMesh<Dim>& piece, const std::vector<geometry::Phase>& phases,
+                       std::vector<PhaseFigures>& figures) {
+  figures.resize(phases.size());
   for (std::size_t c = 0; c < piece.cell_count(); ++c) {
     const auto k = std::ranges::find_if(phases, [&](const geometry::Phase& p) { return p.id == piece.cell_phase[c]; });
     if (k == phases.end()) continue;
@@ -126,8 +133,16 @@ std::vector<PhaseFigures> phase_figures(const Comm& comm, const mesh::SimplexMes
     ++f.elements;
     f.measure += cell_measure(piece, c);
   }
-  for (PhaseFigures& f : figures) f = {comm.allreduce_sum(f.elements), comm.allreduce_sum(f.measure)};
-  return figures;
+}
+
+// A streamed partition's share of the figures take_figures reduces (this rank's so far).
+template <int Dim>
+void add_figures(MeshRun<Dim>& run, const mesh::SimplexMesh<Dim>& part, const std::vector<geometry::Phase>& phases,
+                 std::uint64_t& checksum) {
+  quality::merge_into(run.aspect, quality::aspect_statistics(part, run.bound));
+  if (!run.options.figures) return;
+  add_phase_figures(part, phases, run.phase_figures);
+  checksum += parallel::mesh_checksum(part);
 }
 
 // Aspect ratios, and with Options::figures per-phase counts and measures and the checksum,
@@ -137,11 +152,17 @@ void take_figures(const Comm& comm, MeshRun<Dim>& run) {
   const mesh::SimplexMesh<Dim>& piece = run.mesh.piece.mesh;
   {
     ScopedPhase timer(&run.mesh.times, "quality");
-    const quality::AspectStats local = quality::aspect_statistics(piece, run.bound);
+    // Streamed: this rank's partitions added their share as they were written.
+    const quality::AspectStats local = run.streamed ? run.aspect : quality::aspect_statistics(piece, run.bound);
     run.aspect = run.distributed ? parallel::merge_aspect_statistics(comm, local) : local;
-    if (run.options.figures) run.phase_figures = phase_figures(comm, piece, run.mesh.phases);
+    if (run.options.figures) {
+      if (!run.streamed) add_phase_figures(piece, run.mesh.phases, run.phase_figures);
+      run.phase_figures.resize(run.mesh.phases.size());
+      for (PhaseFigures& f : run.phase_figures) f = {comm.allreduce_sum(f.elements), comm.allreduce_sum(f.measure)};
+    }
   }
-  if (run.options.figures) run.checksum = parallel::mesh_checksum(comm, piece);
+  if (run.options.figures)
+    run.checksum = run.streamed ? parallel::sum_over_ranks(comm, run.checksum) : parallel::mesh_checksum(comm, piece);
   if (run.options.pipeline.cohesive) {  // per phase pair (lower, upper), over every rank
     const std::vector<geometry::Phase>& phases = run.mesh.phases;
     const auto index = [&](std::int32_t id) {
@@ -224,7 +245,25 @@ std::variant<MeshRun<2>, MeshRun<3>> mesh_scene(const Comm& comm, const std::str
                                 .partitions = options.partitions > 0 ? options.partitions : comm.size(),
                                 .partitioning = {},
                                 .ghost = options.ghost};
-        run.mesh = parallel::mesh_distributed<Dim>(comm, std::move(scene), o);
+        if (options.stream.empty()) {
+          run.mesh = parallel::mesh_distributed<Dim>(comm, std::move(scene), o);
+        } else {
+          run.streamed = true;
+          run.aspect.bound = run.bound;
+          io::MeshWriteOptions write;
+          write.face_box = Box3{};
+          for (int d = 0; d < Dim; ++d) write.face_box->min[d] = run.face_box.min[d], write.face_box->max[d] = run.face_box.max[d];
+          const std::vector<geometry::Phase> phases = scene.phases;
+          std::uint64_t checksum = 0;
+          PhaseTimes figures;
+          run.mesh = parallel::mesh_streamed<Dim>(comm, std::move(scene), o, options.stream, write,
+                                                  [&](const mesh::SimplexMesh<Dim>& part) {
+                                                    ScopedPhase timer(&figures, "quality");
+                                                    add_figures(run, part, phases, checksum);
+                                                  });
+          for (const auto& [name, seconds] : figures.phases()) run.mesh.times.add(name, seconds);
+          run.checksum = checksum;
+        }
         run.mesh.times.add("read", read_seconds);
         const std::int64_t files = run.mesh.stl_files_read;
         run.stl_files_read = {-comm.allreduce_max(-files), comm.allreduce_max(files), comm.allreduce_sum(files)};
@@ -242,7 +281,7 @@ std::variant<MeshRun<2>, MeshRun<3>> mesh_scene(const Comm& comm, const std::str
 }
 
 Output plan_output(const Comm& comm, const std::string& requested, bool gather, bool distributed,
-                   const std::string& format, io::PlaneKind plane) {
+                   const std::string& format, io::PlaneKind plane, int streamed_partitions) {
   namespace fs = std::filesystem;
   const std::string extension = format.empty() ? fs::path(requested).extension().string() : "." + format;
   Output out;
@@ -259,12 +298,14 @@ Output plan_output(const Comm& comm, const std::string& requested, bool gather, 
                                           " file on rank 0");
   });
   if (out.pieces)
-    for (int r = 0; r < comm.size(); ++r) out.piece_paths.push_back(parallel::piece_path(out.path, r));
+    for (int r = 0; r < (streamed_partitions > 0 ? streamed_partitions : comm.size()); ++r)
+      out.piece_paths.push_back(parallel::piece_path(out.path, r));
   return out;
 }
 
 template <int Dim>
 void write_outputs(const Comm& comm, MeshRun<Dim>& run, const Output& output, const std::string& svg) {
+  if (run.streamed) return;  // the pieces were written as the partitions were meshed
   ScopedPhase timer(&run.mesh.times, "write");
   const parallel::NumberedPiece<Dim>& piece = run.mesh.piece;
   const bool picture = !svg.empty();

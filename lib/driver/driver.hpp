@@ -25,6 +25,9 @@ struct Options {
   // 0: the sequential mesher on one process, one partition per rank on several; N: the
   // parallel mesher over N partitions (N ≥ ranks).
   int partitions = 0;
+  // --stream: the .pvtu to write while meshing (parallel/stream.hpp), partitions one after
+  // another on each rank; empty: the mesh is assembled in memory and written after.
+  std::string stream;
   parallel::GhostRule ghost;
   double bound = 0;     // aspect-ratio bound of the statistics (0: 3 in 2D, 5 in 3D)
   bool figures = true;  // per-phase counts and measures, checksum (a pass and a sort over the cells)
@@ -38,9 +41,12 @@ struct Options {
   Progress* progress = nullptr;
 };
 
-// Peak memory of a run per element, measured on the examples (about 90 bytes in 2D, 130
-// in 3D), with a margin.
-inline constexpr double kBytesPerElement = 160;
+// Peak memory of a run per element, measured on the examples (about 60 bytes in 2D, 95
+// in 3D: validation/bench/MEMORY.md), with a margin.
+inline constexpr double kBytesPerElement = 130;
+// A streamed run holds one partition per rank at a time: with its ghost (at most a few
+// times its box) about this many partitions' worth of the mesh.
+inline constexpr double kStreamedPartitionsInFlight = 6;
 
 // Whether `options` ask for the parallel mesher on `comm`.
 bool is_distributed(const Comm& comm, const Options& options);
@@ -88,6 +94,7 @@ struct MeshRun {
   std::vector<parallel::PhaseSpread> timings;  // per phase, over ranks (finish)
   double total_seconds = 0;                    // slowest rank (finish)
   RankSpread peak_rss_bytes;                   // each rank's peak resident memory so far (finish)
+  bool streamed = false;                       // written while meshing (Options::stream): no piece
 };
 
 // The box whose faces hold the mesh's boundary nodes, coordinate for coordinate: the
@@ -122,8 +129,10 @@ struct Output {
 // `format` ("vtu", "msh", "inp", "mesh"; empty: from the extension) names the format of a
 // path without one, such as "-"; `plane` the 2D Abaqus element type. Throws InputError on
 // every rank.
+// `streamed_partitions` > 0: a streamed run (Options::stream), one piece per partition.
 Output plan_output(const Comm& comm, const std::string& requested, bool gather, bool distributed,
-                   const std::string& format = "", io::PlaneKind plane = io::PlaneKind::stress);
+                   const std::string& format = "", io::PlaneKind plane = io::PlaneKind::stress,
+                   int streamed_partitions = 0);
 
 // Writes the mesh where `output` says and, with `svg` given, a picture of it (3D: the slice
 // by Options::svg_slice) (timed as "write").

@@ -247,6 +247,11 @@ void AtomicFile::write(const void* data, std::size_t size) {
   }
 }
 
+void AtomicFile::flush() {
+  if (fd_ < 0) fail(EBADF);
+  flush_buffer();
+}
+
 void AtomicFile::commit() {
   if (fd_ < 0) fail(EBADF);
   flush_buffer();

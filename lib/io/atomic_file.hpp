@@ -40,6 +40,9 @@ class AtomicFile {
   // Appends bytes (buffered). Throws InputError on a failed write.
   void write(const void* data, std::size_t size);
   void write(std::string_view text) { write(text.data(), text.size()); }
+  // Writes out what is buffered, so that the temporary can be read back (a spool that is
+  // never committed: its destructor deletes it). Throws InputError on a failed write.
+  void flush();
 
   // Flushes, closes and renames the temporary over the destination; a direct destination
   // is only flushed. Inside an open OutputSet the rename waits for the set's commit().

@@ -100,6 +100,8 @@ std::uint64_t mesh_checksum(const mesh::SimplexMesh<Dim>& m) {
   return sum;
 }
 
+std::uint64_t sum_over_ranks(const Comm& comm, std::uint64_t local) { return allreduce_sum_u64(comm, local); }
+
 template <int Dim>
 std::uint64_t mesh_checksum(const Comm& comm, const mesh::SimplexMesh<Dim>& piece) {
   return allreduce_sum_u64(comm, mesh_checksum(piece));

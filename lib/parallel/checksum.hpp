@@ -35,6 +35,8 @@ std::uint64_t mesh_checksum(const mesh::SimplexMesh<Dim>& m);
 // Collective: the checksum of the union of every rank's cells.
 template <int Dim>
 std::uint64_t mesh_checksum(const Comm& comm, const mesh::SimplexMesh<Dim>& piece);
+// Collective: the sum of every rank's `local` modulo 2^64 (checksums of disjoint cell sets add).
+std::uint64_t sum_over_ranks(const Comm& comm, std::uint64_t local);
 
 inline std::uint64_t mesh_checksum2(const mesh::Mesh2& m) { return mesh_checksum(m); }
 inline std::uint64_t mesh_checksum2(const Comm& comm, const mesh::Mesh2& piece) { return mesh_checksum(comm, piece); }

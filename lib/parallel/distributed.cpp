@@ -222,7 +222,8 @@ DistributedMesh<Dim> mesh_distributed(const Comm& comm, const std::string& scene
 }
 
 template <int Dim>
-DistributedMesh<Dim> mesh_distributed(const Comm& comm, geometry::SceneDesc scene, const MeshOptions& options) {
+DistributedMesh<Dim> mesh_partitions(const Comm& comm, geometry::SceneDesc scene, const MeshOptions& options,
+                                     const PartitionSink<Dim>& sink) {
   using Oracle = geometry::Oracle<Dim>;
   DistributedMesh<Dim> out;
   const int ranks = comm.size(), rank = comm.rank();
@@ -348,7 +349,6 @@ DistributedMesh<Dim> mesh_distributed(const Comm& comm, geometry::SceneDesc scen
   // The unchanged sequential kernel on each partition, with an oracle built from exactly
   // that partition's inclusions: its output (order included) is then the same whatever
   // the other partitions of its rank, so the gathered file does not depend on the ranks.
-  std::vector<PartitionOutput<Dim>> outputs;
   std::vector<PartitionSummary> mine;
   pipeline::Counters<Dim> local;
   // Progress: the kernel as one phase, advanced per partition and within it by its stages.
@@ -397,21 +397,11 @@ DistributedMesh<Dim> mesh_distributed(const Comm& comm, geometry::SceneDesc scen
       o.result.counters.coarse_cells = box_cells;
       pipeline::accumulate(local, o.result.counters);
       mine.push_back(s);
-      outputs.push_back(std::move(o));
+      sink(o, lattice);
     }
     if (partition_progress) partition_progress->finish();
   });
   out.times.progress = progress;
-
-  if (options.pipeline.cohesive) {
-    ScopedPhase timer(&out.times, "cohesive");
-    join_cohesive<Dim>(comm, outputs, lattice);
-  }
-  {
-    ScopedPhase timer(&out.times, "merge");
-    out.piece = merge_and_number<Dim>(comm, outputs, lattice, options.pipeline.cohesive);
-  }
-  out.global_cells = comm.allreduce_sum(static_cast<std::int64_t>(out.piece.mesh.cell_count()));
 
   // Counters over all ranks. (leaves/refinements/... count ghost work too: they say what
   // was computed, not what was kept.)
@@ -421,12 +411,35 @@ DistributedMesh<Dim> mesh_distributed(const Comm& comm, geometry::SceneDesc scen
   out.partitions = allgather_vector(comm, mine);
   std::sort(out.partitions.begin(), out.partitions.end(),
             [](const PartitionSummary& a, const PartitionSummary& b) { return a.id < b.id; });
+  for (const PartitionSummary& s : out.partitions) out.global_cells += s.elements;
+  return out;
+}
+
+template <int Dim>
+DistributedMesh<Dim> mesh_distributed(const Comm& comm, geometry::SceneDesc scene, const MeshOptions& options) {
+  std::vector<PartitionOutput<Dim>> outputs;
+  grid::Lattice<Dim> lattice;
+  DistributedMesh<Dim> out =
+      mesh_partitions<Dim>(comm, std::move(scene), options, [&](PartitionOutput<Dim>& o, const grid::Lattice<Dim>& l) {
+        outputs.push_back(std::move(o));
+        lattice = l;
+      });
+  if (options.pipeline.cohesive) {
+    ScopedPhase timer(&out.times, "cohesive");
+    join_cohesive<Dim>(comm, outputs, lattice);
+  }
+  {
+    ScopedPhase timer(&out.times, "merge");
+    out.piece = merge_and_number<Dim>(comm, outputs, lattice, options.pipeline.cohesive);
+  }
   return out;
 }
 
 template DistributedMesh<2> mesh_distributed<2>(const Comm&, const std::string&, const MeshOptions&);
 template DistributedMesh<3> mesh_distributed<3>(const Comm&, const std::string&, const MeshOptions&);
 template DistributedMesh<2> mesh_distributed<2>(const Comm&, geometry::SceneDesc, const MeshOptions&);
+template DistributedMesh<2> mesh_partitions<2>(const Comm&, geometry::SceneDesc, const MeshOptions&, const PartitionSink<2>&);
+template DistributedMesh<3> mesh_partitions<3>(const Comm&, geometry::SceneDesc, const MeshOptions&, const PartitionSink<3>&);
 template DistributedMesh<3> mesh_distributed<3>(const Comm&, geometry::SceneDesc, const MeshOptions&);
 
 }  // namespace cisamr::parallel

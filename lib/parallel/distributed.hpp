@@ -16,6 +16,7 @@
 //   merge     nodes merged by lattice identity, owners, global ids (merge.hpp)
 // Every stage ends with an agreement on errors (collective.hpp).
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -103,5 +104,18 @@ DistributedMesh<Dim> mesh_distributed(const Comm& comm, const std::string& scene
 // STL surfaces without triangles are read from their files by the ranks that need them.
 template <int Dim>
 DistributedMesh<Dim> mesh_distributed(const Comm& comm, geometry::SceneDesc scene, const MeshOptions& options);
+
+// What receives each partition as soon as the kernel has meshed it (with the global
+// lattice); it may move the result out.
+template <int Dim>
+using PartitionSink = std::function<void(PartitionOutput<Dim>&, const grid::Lattice<Dim>&)>;
+
+// Collective. mesh_distributed up to the kernel: this rank's partitions are meshed one after
+// another (ascending ids) and each is handed to `sink` when done, so that only one is held
+// at a time (the merge or the streamed output decide what to keep). The result has no
+// piece; its partitions, counters, times, phases, domain and global_cells are set.
+template <int Dim>
+DistributedMesh<Dim> mesh_partitions(const Comm& comm, geometry::SceneDesc scene, const MeshOptions& options,
+                                     const PartitionSink<Dim>& sink);
 
 }  // namespace cisamr::parallel

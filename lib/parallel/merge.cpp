@@ -97,6 +97,125 @@ struct Claim {  // one rank's claim on a face identity, as the rendezvous rank s
   std::int32_t rank;
 };
 
+// A lattice point on a face of `box` that is not the domain's boundary.
+template <int Dim>
+bool on_inner_face_of(std::uint64_t key, const grid::CellRange<Dim>& box, const grid::Lattice<Dim>& lattice,
+                      std::int64_t unit) {
+  const auto p = Identities<Dim>::point(key);
+  for (int d = 0; d < Dim; ++d) {
+    const std::int64_t lo = box.lo[d] * unit, hi = box.hi[d] * unit;
+    if ((p[d] == lo && box.lo[d] != 0) || (p[d] == hi && box.hi[d] != lattice.coarse_cells[d])) return true;
+  }
+  return false;
+}
+
+template <class Key>
+std::size_t home_rank(const Comm& comm, const Key& key) {
+  return static_cast<std::size_t>(hash_of(key) % static_cast<std::uint64_t>(comm.size()));
+}
+
+// Collective. Each rank's claims (key, partition) meet at the key's home rank (a hash of the
+// key), which answers every claim with the lowest partition claiming the key anywhere;
+// `held` keeps what the home rank received (for forward_ids). Returns this rank's answers,
+// (key, lowest partition), one per claim, in no particular order.
+template <class Key>
+std::vector<std::pair<Key, std::int32_t>> lowest_claims(const Comm& comm, const std::vector<std::pair<Key, std::int32_t>>& mine,
+                                                        std::vector<Claim<Key>>& held) {
+  const auto size = static_cast<std::size_t>(comm.size());
+  std::vector<Packer> requests(size);
+  for (const auto& [key, partition] : mine) {
+    Packer& p = requests[home_rank(comm, key)];
+    p.put(key);
+    p.put<std::int32_t>(partition);
+  }
+  std::vector<Bytes> send(size);
+  for (std::size_t r = 0; r < size; ++r) send[r] = requests[r].take();
+  std::vector<Bytes> received = comm.alltoallv(send);
+  held.clear();
+  run_collectively(comm, [&] {
+    for (std::size_t r = 0; r < size; ++r) {
+      Unpacker u(received[r]);
+      while (!u.done()) {
+        const auto key = u.get<Key>();
+        const auto partition = u.get<std::int32_t>();
+        held.push_back({key, partition, static_cast<std::int32_t>(r)});
+      }
+    }
+    std::sort(held.begin(), held.end(), [](const Claim<Key>& a, const Claim<Key>& b) {
+      return a.key != b.key ? a.key < b.key : a.partition < b.partition;
+    });
+  });
+  std::vector<Packer> replies(size);
+  for (std::size_t i = 0; i < held.size();) {
+    std::size_t j = i;
+    while (j < held.size() && held[j].key == held[i].key) ++j;
+    for (std::size_t k = i; k < j; ++k) {
+      Packer& p = replies[static_cast<std::size_t>(held[k].rank)];
+      p.put(held[k].key);
+      p.put<std::int32_t>(held[i].partition);
+    }
+    i = j;
+  }
+  for (std::size_t r = 0; r < size; ++r) send[r] = replies[r].take();
+  received = comm.alltoallv(send);
+  std::vector<std::pair<Key, std::int32_t>> out;
+  for (const Bytes& b : received) {
+    Unpacker u(b);
+    while (!u.done()) {
+      const auto key = u.get<Key>();
+      out.emplace_back(key, u.get<std::int32_t>());
+    }
+  }
+  return out;
+}
+
+// Collective. The owners' (key, global id) reach every claimant of the key (lowest_claims'
+// `held`) through the key's home rank. Returns this rank's (key, global id), one per claim.
+template <class Key>
+std::vector<std::pair<Key, std::int64_t>> forward_ids(const Comm& comm, const std::vector<std::pair<Key, std::int64_t>>& owned,
+                                                      const std::vector<Claim<Key>>& held) {
+  const auto size = static_cast<std::size_t>(comm.size());
+  std::vector<Packer> ids(size);
+  for (const auto& [key, gid] : owned) {
+    Packer& p = ids[home_rank(comm, key)];
+    p.put(key);
+    p.put<std::int64_t>(gid);
+  }
+  std::vector<Bytes> send(size);
+  for (std::size_t r = 0; r < size; ++r) send[r] = ids[r].take();
+  std::vector<Bytes> received = comm.alltoallv(send);
+  std::vector<Packer> forward(size);
+  run_collectively(comm, [&] {
+    std::vector<std::pair<Key, std::int64_t>> known;
+    for (const Bytes& b : received) {
+      Unpacker u(b);
+      while (!u.done()) {
+        const auto key = u.get<Key>();
+        known.emplace_back(key, u.get<std::int64_t>());
+      }
+    }
+    std::sort(known.begin(), known.end());
+    for (const Claim<Key>& c : held) {
+      const auto it = std::lower_bound(known.begin(), known.end(), std::make_pair(c.key, std::int64_t{-1}));
+      if (it == known.end() || it->first != c.key) throw std::logic_error("merge: a face node without owner");
+      Packer& p = forward[static_cast<std::size_t>(c.rank)];
+      p.put(c.key);
+      p.put(it->second);
+    }
+  });
+  for (std::size_t r = 0; r < size; ++r) send[r] = forward[r].take();
+  received = comm.alltoallv(send);
+  std::vector<std::pair<Key, std::int64_t>> out;
+  for (const Bytes& b : received) {
+    Unpacker u(b);
+    while (!u.done()) {
+      const auto key = u.get<Key>();
+      out.emplace_back(key, u.get<std::int64_t>());
+    }
+  }
+  return out;
+}
+
 }  // namespace merge_detail
 using namespace merge_detail;
 
@@ -106,10 +225,6 @@ NumberedPiece<Dim> merge_keys(const Comm& comm, std::vector<PartitionOutput<Dim>
   using Id = Identities<Dim>;
   constexpr bool kSided = !std::is_same_v<Key, typename Id::Key>;
   constexpr int kCorners = Dim + 1;
-  const int size = comm.size();
-  const auto home_rank = [size](const Key& key) {
-    return static_cast<std::size_t>(hash_of(key) % static_cast<std::uint64_t>(size));
-  };
   NumberedPiece<Dim> piece;
   std::vector<std::int32_t> first_part;  // per merged node: lowest local partition emitting it
   std::vector<char> on_face;             // per merged node: on a partition face inside the domain
@@ -123,16 +238,7 @@ NumberedPiece<Dim> merge_keys(const Comm& comm, std::vector<PartitionOutput<Dim>
     const std::int64_t unit = lattice.units(0);
     for (PartitionOutput<Dim>& part : parts) {
       const auto& m = part.result.mesh;
-      // A lattice point on a face of this box that is not the domain's boundary.
-      const auto on_inner_face = [&](std::uint64_t key) {
-        const auto p = Id::point(key);
-        for (int d = 0; d < Dim; ++d) {
-          const std::int64_t lo = part.box.lo[d] * unit, hi = part.box.hi[d] * unit;
-          if ((p[d] == lo && part.box.lo[d] != 0) || (p[d] == hi && part.box.hi[d] != lattice.coarse_cells[d]))
-            return true;
-        }
-        return false;
-      };
+      const auto on_inner_face = [&](std::uint64_t key) { return on_inner_face_of<Dim>(key, part.box, lattice, unit); };
       std::vector<std::int32_t> local(m.node_count());
       if (kSided && m.node_phase.size() != m.node_count())
         throw std::logic_error("merge: a cohesive partition without node phases");
@@ -179,61 +285,24 @@ NumberedPiece<Dim> merge_keys(const Comm& comm, std::vector<PartitionOutput<Dim>
     }
   });
 
-  // 2. Face identities to their rendezvous rank, with the lowest local partition.
+  // 2. Face identities to their rendezvous rank, with the lowest local partition; the
+  //    lowest claiming partition owns each.
   const std::size_t node_count = keys.size();
-  std::vector<Packer> requests(static_cast<std::size_t>(size));
-  for (std::size_t n = 0; n < node_count; ++n)
-    if (on_face[n]) {
-      Packer& p = requests[home_rank(keys[n])];
-      p.put(keys[n]);
-      p.put<std::int32_t>(parts[static_cast<std::size_t>(first_part[n])].partition);
-    }
-  std::vector<Bytes> send(static_cast<std::size_t>(size));
-  for (int r = 0; r < size; ++r) send[static_cast<std::size_t>(r)] = requests[static_cast<std::size_t>(r)].take();
-  std::vector<Bytes> received = comm.alltoallv(send);
-
-  // 3. Rendezvous: owner = lowest claiming partition; tell every claimant.
   std::vector<Claim<Key>> claims;
-  run_collectively(comm, [&] {
-    for (int r = 0; r < size; ++r) {
-      Unpacker u(received[static_cast<std::size_t>(r)]);
-      while (!u.done()) {
-        const auto key = u.get<Key>();
-        const auto partition = u.get<std::int32_t>();
-        claims.push_back({key, partition, r});
-      }
-    }
-    std::sort(claims.begin(), claims.end(), [](const Claim<Key>& a, const Claim<Key>& b) {
-      return a.key != b.key ? a.key < b.key : a.partition < b.partition;
-    });
-  });
-  std::vector<Packer> replies(static_cast<std::size_t>(size));
-  for (std::size_t i = 0; i < claims.size();) {
-    std::size_t j = i;
-    while (j < claims.size() && claims[j].key == claims[i].key) ++j;
-    for (std::size_t k = i; k < j; ++k) {
-      Packer& p = replies[static_cast<std::size_t>(claims[k].rank)];
-      p.put(claims[k].key);
-      p.put<std::int32_t>(claims[i].partition);
-    }
-    i = j;
-  }
-  for (int r = 0; r < size; ++r) send[static_cast<std::size_t>(r)] = replies[static_cast<std::size_t>(r)].take();
-  received = comm.alltoallv(send);
+  std::vector<std::pair<Key, std::int32_t>> mine;
+  for (std::size_t n = 0; n < node_count; ++n)
+    if (on_face[n]) mine.emplace_back(keys[n], parts[static_cast<std::size_t>(first_part[n])].partition);
+  const std::vector<std::pair<Key, std::int32_t>> owners = lowest_claims(comm, mine, claims);
+  std::vector<std::pair<Key, std::int32_t>>().swap(mine);
 
   // 4. Owned nodes first, in creation order = (owner partition, kernel output order).
   std::vector<char> owned(node_count, 1);
   std::vector<std::int32_t> new_id(node_count, -1);
   run_collectively(comm, [&] {
-    for (const Bytes& b : received) {
-      Unpacker u(b);
-      while (!u.done()) {
-        const auto key = u.get<Key>();
-        const auto owner = u.get<std::int32_t>();
-        const std::int32_t id = by_key.find(key);
-        if (id < 0) throw std::logic_error("merge: a reply for a key this rank does not hold");
-        owned[static_cast<std::size_t>(id)] = owner == parts[static_cast<std::size_t>(first_part[static_cast<std::size_t>(id)])].partition;
-      }
+    for (const auto& [key, owner] : owners) {
+      const std::int32_t id = by_key.find(key);
+      if (id < 0) throw std::logic_error("merge: a reply for a key this rank does not hold");
+      owned[static_cast<std::size_t>(id)] = owner == parts[static_cast<std::size_t>(first_part[static_cast<std::size_t>(id)])].partition;
     }
     std::int32_t next = 0;
     for (int pass = 1; pass >= 0; --pass)
@@ -266,45 +335,13 @@ NumberedPiece<Dim> merge_keys(const Comm& comm, std::vector<PartitionOutput<Dim>
   for (auto& v : m.cohesive.nodes) v = new_id[static_cast<std::size_t>(v)];
 
   // 5. Owners send the global ids of face nodes to the rendezvous, which forwards them.
-  std::vector<Packer> ids(static_cast<std::size_t>(size));
+  std::vector<std::pair<Key, std::int64_t>> owned_ids;
   for (std::size_t n = 0; n < node_count; ++n)
-    if (on_face[n] && owned[n]) {
-      Packer& p = ids[home_rank(keys[n])];
-      p.put(keys[n]);
-      p.put<std::int64_t>(m.node_global_id[static_cast<std::size_t>(new_id[n])]);
-    }
-  for (int r = 0; r < size; ++r) send[static_cast<std::size_t>(r)] = ids[static_cast<std::size_t>(r)].take();
-  received = comm.alltoallv(send);
-  std::vector<Packer> forward(static_cast<std::size_t>(size));
+    if (on_face[n] && owned[n]) owned_ids.emplace_back(keys[n], m.node_global_id[static_cast<std::size_t>(new_id[n])]);
+  const std::vector<std::pair<Key, std::int64_t>> forwarded = forward_ids(comm, owned_ids, claims);
   run_collectively(comm, [&] {
-    std::vector<std::pair<Key, std::int64_t>> known;
-    for (const Bytes& b : received) {
-      Unpacker u(b);
-      while (!u.done()) {
-        const auto key = u.get<Key>();
-        known.emplace_back(key, u.get<std::int64_t>());
-      }
-    }
-    std::sort(known.begin(), known.end());
-    for (const Claim<Key>& c : claims) {
-      const auto it = std::lower_bound(known.begin(), known.end(), std::make_pair(c.key, std::int64_t{-1}));
-      if (it == known.end() || it->first != c.key) throw std::logic_error("merge: a face node without owner");
-      Packer& p = forward[static_cast<std::size_t>(c.rank)];
-      p.put(c.key);
-      p.put(it->second);
-    }
-  });
-  for (int r = 0; r < size; ++r) send[static_cast<std::size_t>(r)] = forward[static_cast<std::size_t>(r)].take();
-  received = comm.alltoallv(send);
-  run_collectively(comm, [&] {
-    for (const Bytes& b : received) {
-      Unpacker u(b);
-      while (!u.done()) {
-        const auto key = u.get<Key>();
-        const auto gid = u.get<std::int64_t>();
-        m.node_global_id[static_cast<std::size_t>(new_id[static_cast<std::size_t>(by_key.find(key))])] = gid;
-      }
-    }
+    for (const auto& [key, gid] : forwarded)
+      m.node_global_id[static_cast<std::size_t>(new_id[static_cast<std::size_t>(by_key.find(key))])] = gid;
     for (GlobalId g : m.node_global_id)
       if (g < 0) throw std::logic_error("merge: a node was left without a global id");
   });
@@ -316,6 +353,111 @@ NumberedPiece<Dim> merge_and_number(const Comm& comm, std::vector<PartitionOutpu
                                     const grid::Lattice<Dim>& lattice, bool cohesive) {
   using Id = typename Identities<Dim>::Key;
   return cohesive ? merge_keys<Dim, SidedKey<Id>>(comm, parts, lattice) : merge_keys<Dim, Id>(comm, parts, lattice);
+}
+
+template <int Dim>
+PartitionFaces<Dim> partition_faces(const PartitionOutput<Dim>& part, const grid::Lattice<Dim>& lattice) {
+  using Id = Identities<Dim>;
+  PartitionFaces<Dim> out;
+  out.partition = part.partition;
+  out.nodes = static_cast<std::int64_t>(part.result.mesh.node_count());
+  const std::int64_t unit = lattice.units(0);
+  for (std::size_t n = 0; n < part.result.node_identity.size(); ++n) {
+    const auto& key = part.result.node_identity[n];
+    if (key == pipeline::Result<Dim>::kUnshared) continue;
+    bool face = true;
+    for (std::uint64_t k : Id::lattice_keys(key)) face = face && on_inner_face_of<Dim>(k, part.box, lattice, unit);
+    if (!face) continue;
+    out.local.push_back(static_cast<std::int32_t>(n));
+    out.identity.push_back(key);
+  }
+  return out;
+}
+
+template <int Dim>
+StreamNumbering<Dim> number_streamed(const Comm& comm, const std::vector<PartitionFaces<Dim>>& parts, int partitions) {
+  using Key = typename Identities<Dim>::Key;
+  StreamNumbering<Dim> out;
+  // 1. The owner of each face node: the lowest partition claiming it.
+  std::vector<std::pair<Key, std::int32_t>> mine;
+  for (const PartitionFaces<Dim>& p : parts)
+    for (const Key& key : p.identity) mine.emplace_back(key, p.partition);
+  std::vector<Claim<Key>> held;
+  std::vector<std::pair<Key, std::int32_t>> owners = lowest_claims(comm, mine, held);
+  std::vector<std::pair<Key, std::int32_t>>().swap(mine);
+  std::sort(owners.begin(), owners.end());
+  owners.erase(std::unique(owners.begin(), owners.end()), owners.end());
+  const auto owner_of = [&](const Key& key) {
+    const auto it = std::lower_bound(owners.begin(), owners.end(), std::make_pair(key, std::int32_t{-1}));
+    if (it == owners.end() || it->first != key) throw std::logic_error("merge: a face node without a claim");
+    return it->second;
+  };
+  // 2. Owned counts of every partition, their offsets in partition order.
+  std::vector<std::vector<char>> owned(parts.size());
+  std::vector<std::array<std::int64_t, 2>> counts;  // (partition, owned nodes)
+  for (std::size_t k = 0; k < parts.size(); ++k) {
+    std::int64_t copies = 0;
+    for (const Key& key : parts[k].identity) {
+      owned[k].push_back(owner_of(key) == parts[k].partition);
+      copies += owned[k].back() ? 0 : 1;
+    }
+    counts.push_back({parts[k].partition, parts[k].nodes - copies});
+    out.owned_nodes += parts[k].nodes - copies;
+  }
+  std::vector<std::int64_t> first(static_cast<std::size_t>(partitions) + 1, 0);
+  for (const auto& [partition, count] : allgather_vector(comm, counts)) first[static_cast<std::size_t>(partition) + 1] = count;
+  for (std::size_t p = 1; p < first.size(); ++p) first[p] += first[p - 1];
+  out.global_nodes = first.back();
+  // 3. Owned face nodes get their ids here; the others learn them from their owners.
+  std::vector<std::pair<Key, std::int64_t>> owned_ids;
+  out.face_ids.resize(parts.size());
+  for (std::size_t k = 0; k < parts.size(); ++k) {
+    out.offset.push_back(first[static_cast<std::size_t>(parts[k].partition)]);
+    out.face_ids[k].assign(parts[k].local.size(), -1);
+    std::int64_t copies_before = 0;
+    for (std::size_t j = 0; j < parts[k].local.size(); ++j) {
+      if (!owned[k][j]) {
+        ++copies_before;
+        continue;
+      }
+      const GlobalId gid = out.offset[k] + parts[k].local[j] - copies_before;
+      out.face_ids[k][j] = gid;
+      owned_ids.emplace_back(parts[k].identity[j], gid);
+    }
+  }
+  std::vector<std::pair<Key, std::int64_t>> known = forward_ids(comm, owned_ids, held);
+  std::sort(known.begin(), known.end());
+  run_collectively(comm, [&] {
+    for (std::size_t k = 0; k < parts.size(); ++k)
+      for (std::size_t j = 0; j < parts[k].local.size(); ++j) {
+        if (owned[k][j]) continue;
+        const Key& key = parts[k].identity[j];
+        const auto it = std::lower_bound(known.begin(), known.end(), std::make_pair(key, std::int64_t{-1}));
+        if (it == known.end() || it->first != key) throw std::logic_error("merge: a face node without a global id");
+        out.face_ids[k][j] = it->second;
+      }
+  });
+  return out;
+}
+
+template <int Dim>
+std::vector<GlobalId> global_ids_of(const PartitionFaces<Dim>& part, std::int64_t offset,
+                                    const std::vector<GlobalId>& face_ids) {
+  std::vector<GlobalId> ids(static_cast<std::size_t>(part.nodes));
+  std::size_t j = 0;
+  std::int64_t copies_before = 0;
+  for (std::size_t n = 0; n < ids.size(); ++n) {
+    if (j < part.local.size() && static_cast<std::size_t>(part.local[j]) == n) {
+      ids[n] = face_ids[j];
+      // A copy (its owner is a lower partition, whose ids are below `offset`) takes no id of
+      // this partition's.
+      if (face_ids[j] < offset) ++copies_before;
+      ++j;
+      continue;
+    }
+    ids[n] = offset + static_cast<std::int64_t>(n) - copies_before;
+  }
+  return ids;
 }
 
 template <int Dim>
@@ -388,5 +530,12 @@ template NumberedPiece<2> merge_and_number<2>(const Comm&, std::vector<Partition
 template NumberedPiece<3> merge_and_number<3>(const Comm&, std::vector<PartitionOutput<3>>&, const grid::Lattice<3>&, bool);
 template mesh::SimplexMesh<2> gather_mesh<2>(const Comm&, const NumberedPiece<2>&, int);
 template mesh::SimplexMesh<3> gather_mesh<3>(const Comm&, const NumberedPiece<3>&, int);
+
+template PartitionFaces<2> partition_faces<2>(const PartitionOutput<2>&, const grid::Lattice<2>&);
+template PartitionFaces<3> partition_faces<3>(const PartitionOutput<3>&, const grid::Lattice<3>&);
+template StreamNumbering<2> number_streamed<2>(const Comm&, const std::vector<PartitionFaces<2>>&, int);
+template StreamNumbering<3> number_streamed<3>(const Comm&, const std::vector<PartitionFaces<3>>&, int);
+template std::vector<GlobalId> global_ids_of<2>(const PartitionFaces<2>&, std::int64_t, const std::vector<GlobalId>&);
+template std::vector<GlobalId> global_ids_of<3>(const PartitionFaces<3>&, std::int64_t, const std::vector<GlobalId>&);
 
 }  // namespace cisamr::parallel

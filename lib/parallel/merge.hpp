@@ -65,6 +65,37 @@ inline NumberedPiece2 merge_and_number2(const Comm& comm, std::vector<PartitionO
   return merge_and_number<2>(comm, parts, lattice);
 }
 
+// Streamed output (stream.hpp): what a rank keeps of each of its partitions once their cells
+// are spooled, and the global ids merge_and_number would give their nodes.
+template <int Dim>
+struct PartitionFaces {
+  int partition = 0;
+  std::int64_t nodes = 0;
+  std::vector<std::int32_t> local;                    // nodes on an inner face of its box, ascending
+  std::vector<pipeline::NodeIdentity<Dim>> identity;  // their identities
+};
+// The nodes of `part` that other partitions may emit too (merge_and_number's face test).
+template <int Dim>
+PartitionFaces<Dim> partition_faces(const PartitionOutput<Dim>& part, const grid::Lattice<Dim>& lattice);
+
+// Collective. `parts`: this rank's partitions, ascending, every rank's a block of consecutive
+// ids, ranks in ascending order (as merge_and_number). Returns, per partition of `parts`,
+// the global id of each of its nodes: exactly those merge_and_number gives the merged nodes
+// (owner: the lowest partition emitting a node; owned nodes numbered in (partition, local)
+// order). Only face identities travel; `global_nodes` is set to the mesh's node count.
+template <int Dim>
+std::vector<GlobalId> global_ids_of(const PartitionFaces<Dim>& part, std::int64_t offset,
+                                    const std::vector<GlobalId>& face_ids);
+template <int Dim>
+struct StreamNumbering {
+  std::vector<std::int64_t> offset;              // per partition of `parts`: its first owned id
+  std::vector<std::vector<GlobalId>> face_ids;   // per partition, per face node: its global id
+  std::int64_t owned_nodes = 0;                  // this rank's
+  std::int64_t global_nodes = 0;
+};
+template <int Dim>
+StreamNumbering<Dim> number_streamed(const Comm& comm, const std::vector<PartitionFaces<Dim>>& parts, int partitions);
+
 // Collective. The whole mesh on `root` (nodes in global-id order, cells by partition),
 // an empty mesh elsewhere. Checks that every copy of a node has the same coordinate bits
 // (std::logic_error otherwise).

@@ -105,16 +105,7 @@ quality::AspectStats merge_aspect_statistics(const Comm& comm, const quality::As
     Unpacker u(b);
     const auto edges = u.get_vector<double>();
     const auto h = u.get_vector<std::uint64_t>();
-    if (edges.size() > g.bin_edges.size()) {
-      // Longer edge list: move the overflow bin to the new end.
-      const std::size_t overflow = g.histogram.empty() ? 0 : g.histogram.back();
-      if (!g.histogram.empty()) g.histogram.back() = 0;
-      g.bin_edges = edges;
-      g.histogram.resize(edges.size(), 0);
-      g.histogram.back() += overflow;
-    }
-    for (std::size_t i = 0; i + 1 < h.size(); ++i) g.histogram[i] += h[i];
-    if (!h.empty()) g.histogram.back() += h.back();
+    quality::add_histogram(g, edges, std::vector<std::size_t>(h.begin(), h.end()));
   }
   return g;
 }

@@ -170,4 +170,36 @@ AspectStats aspect_statistics(const mesh::SimplexMesh<Dim>& m, double bound, int
 template AspectStats aspect_statistics<2>(const mesh::SimplexMesh<2>&, double, int);
 template AspectStats aspect_statistics<3>(const mesh::SimplexMesh<3>&, double, int);
 
+void add_histogram(AspectStats& total, const std::vector<double>& edges, const std::vector<std::size_t>& hist) {
+  if (edges.size() > total.bin_edges.size()) {
+    const std::size_t overflow = total.histogram.empty() ? 0 : total.histogram.back();
+    if (!total.histogram.empty()) total.histogram.back() = 0;
+    total.bin_edges = edges;
+    total.histogram.resize(edges.size(), 0);
+    total.histogram.back() += overflow;
+  }
+  for (std::size_t i = 0; i + 1 < hist.size(); ++i) total.histogram[i] += hist[i];
+  if (!hist.empty()) total.histogram.back() += hist.back();
+}
+
+void merge_into(AspectStats& total, const AspectStats& part) {
+  total.worst.clear();
+  if (part.count == 0) return;
+  if (total.count == 0) {
+    const double bound = total.bound;
+    total = part;
+    total.worst.clear();
+    if (bound > 0) total.bound = bound;
+    return;
+  }
+  total.max = std::max(total.max, part.max);
+  const double weighted = total.mean * static_cast<double>(total.count) + part.mean * static_cast<double>(part.count);
+  total.count += part.count;
+  total.mean = weighted / static_cast<double>(total.count);
+  total.above_bound += part.above_bound;
+  total.min_angle_deg = std::min(total.min_angle_deg, part.min_angle_deg);
+  total.max_angle_deg = std::max(total.max_angle_deg, part.max_angle_deg);
+  add_histogram(total, part.bin_edges, part.histogram);
+}
+
 }  // namespace cisamr::quality

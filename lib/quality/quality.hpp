@@ -55,6 +55,15 @@ struct AspectStats {
 template <int Dim>
 AspectStats aspect_statistics(const mesh::SimplexMesh<Dim>& m, double bound, int worst_count = 20);
 
+// Adds histogram `hist` over `edges` to `total`'s, bin by bin. Every statistics' edges are a
+// prefix of the same sequence (1.0, 1.1, ...), so the longer list is kept and the overflow
+// bin of the shorter moves to its new end.
+void add_histogram(AspectStats& total, const std::vector<double>& edges, const std::vector<std::size_t>& hist);
+// The statistics of the union of two cell sets (partitions meshed one after another):
+// max, counts, mean weighted by count, angles, histograms. `worst` is cleared (cell ids are
+// per set).
+void merge_into(AspectStats& total, const AspectStats& part);
+
 // ---------------------------------------------------------------------------------------
 // Conformity (DESIGN.md §2.1).
 // ---------------------------------------------------------------------------------------
