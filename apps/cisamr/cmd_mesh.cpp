@@ -84,9 +84,9 @@ void run_mesh(MeshArgs& args, const GlobalFlags& flags, int& exit_code) {
   // Fail on a bad output name before any work.
   driver::Output output =
       driver::plan_output(comm, args.output, args.gather, driver::is_distributed(comm, options), args.format,
-                          args.plane == "strain" ? io::PlaneKind::strain : io::PlaneKind::stress,
-                          args.stream ? options.partitions : 0);
+                          args.plane == "strain" ? io::PlaneKind::strain : io::PlaneKind::stress);
   if (args.stream) options.stream = output.path;
+  else if (output.pieces && args.svg.empty()) options.stream_if_needed = output.path;
   if (options.pipeline.cohesive)
     parallel::run_collectively(comm, [&] {
       if (!output.pieces && (output.format ? *output.format : io::mesh_format_of(output.path)) == io::MeshFormat::medit)
@@ -100,6 +100,12 @@ void run_mesh(MeshArgs& args, const GlobalFlags& flags, int& exit_code) {
   auto meshed = driver::mesh_scene(comm, args.scene, options);
   std::visit(
       [&](auto& run) {
+        if (run.streamed) {  // one piece per partition (their number may have been chosen for memory)
+          output.piece_paths.clear();
+          for (std::size_t p = 0; p < run.mesh.partitions.size(); ++p)
+            output.piece_paths.push_back(parallel::piece_path(output.path, static_cast<int>(p)));
+        }
+        if (comm.rank() == 0 && !run.note.empty() && !flags.quiet) std::fprintf(stderr, "cisamr: note: %s\n", run.note.c_str());
         driver::write_outputs(comm, run, output, args.svg);
         driver::finish(comm, run);
         if (!args.report.empty())
@@ -160,8 +166,9 @@ void add_mesh_command(CLI::App& app, GlobalFlags& flags, int& exit_code) {
                   "mpiexec: one per rank)")
       ->check(number_in(1, 1 << 20, true));
   cmd->add_option("--max-elements", args->options.max_elements,
-                  "Refuse a scene whose estimated mesh has more elements than this (default: what this "
-                  "machine's memory holds, at 160 bytes per element)")
+                  "The most elements held in memory (default: what this machine's memory holds at 130 bytes "
+                  "per element). A larger estimate is refused, or streamed when the output is .pvtu pieces; a "
+                  "streamed run holds about 6 of its partitions' worth at a time")
       ->check(number_in(1, 1e15));
   cmd->add_flag("--cohesive", args->options.pipeline.cohesive,
                 "Zero-thickness cohesive elements on every interface between phases (COH2D4/COH3D6 in .inp, "

@@ -38,19 +38,42 @@ std::string about(double value) {
   return text;
 }
 
+double physical_memory() {
+  return static_cast<double>(sysconf(_SC_PHYS_PAGES)) * static_cast<double>(sysconf(_SC_PAGE_SIZE));
+}
+
+// The most elements one run holds in memory: Options::max_elements, or what this machine's
+// memory holds at kBytesPerElement.
+double elements_in_memory(const Options& options) {
+  return options.max_elements > 0 ? options.max_elements : physical_memory() / kBytesPerElement;
+}
+
+// With Options::stream_if_needed: the partitions to stream over when the mesh would not fit
+// (each of `ranks` holding one partition, its ghost included, at a time), 0 when it fits or
+// cannot be streamed.
+template <int Dim>
+int partitions_to_stream(const geometry::SceneDesc& scene, const Options& options, int ranks) {
+  if (options.stream_if_needed.empty() || !options.stream.empty()) return 0;
+  if (options.pipeline.cohesive || scene.any_periodic()) return 0;
+  const double elements = pipeline::estimate_mesh<Dim>(scene).total();
+  const double fits = elements_in_memory(options);
+  if (elements <= fits) return 0;
+  const double needed = std::ceil(kStreamedPartitionsInFlight * elements / fits) * ranks;
+  return static_cast<int>(std::max<double>({needed, 8.0 * ranks, static_cast<double>(options.partitions)}));
+}
+
 // Refuses, before any memory is taken, a mesh estimated above Options::max_elements, and
 // more partitions than coarse cells. Throws InputError naming the scene's field.
 template <int Dim>
 void check_request(const geometry::SceneDesc& scene, const Options& options) {
   const pipeline::MeshEstimate estimate = pipeline::estimate_mesh<Dim>(scene);
-  const double memory = static_cast<double>(sysconf(_SC_PHYS_PAGES)) * static_cast<double>(sysconf(_SC_PAGE_SIZE));
+  const double memory = physical_memory();
   // Streamed, a rank holds one partition at a time (its ghost included).
   const double streamed_share =
       options.stream.empty() || options.partitions <= 0
           ? 1.0
           : std::min(1.0, kStreamedPartitionsInFlight / static_cast<double>(options.partitions));
-  const double limit =
-      options.max_elements > 0 ? options.max_elements : memory / kBytesPerElement / streamed_share;
+  const double limit = elements_in_memory(options) / streamed_share;
   if (estimate.total() > limit) {
     std::string field = "mesh.h";
     if (estimate.background <= limit && estimate.largest_inclusion >= 0) {
@@ -232,7 +255,18 @@ std::variant<MeshRun<2>, MeshRun<3>> mesh_scene(const Comm& comm, const std::str
     run.ranks = comm.size();
     run.start = start;
     run.bound = options.bound > 0 ? options.bound : Dim == 2 ? 3.0 : 5.0;
-    parallel::run_collectively(comm, [&] { check_request<Dim>(scene, options); });
+    if (distributed) {
+      int partitions = 0;
+      parallel::run_collectively(comm, [&] { partitions = partitions_to_stream<Dim>(scene, options, comm.size()); });
+      if (partitions > 0) {
+        run.options.stream = options.stream_if_needed;
+        run.options.partitions = partitions;
+        run.note = "the mesh would have about " + about(pipeline::estimate_mesh<Dim>(scene).total()) +
+                   " elements, more than the " + about(elements_in_memory(options)) +
+                   " held in memory: streamed over " + std::to_string(partitions) + " partitions (--stream)";
+      }
+    }
+    parallel::run_collectively(comm, [&] { check_request<Dim>(scene, run.options); });
     try {
       run.face_box = face_box<Dim>(scene, options.pipeline);  // builds the lattice: may refuse the scene
       const grid::Lattice<Dim> lattice = pipeline::make_lattice<Dim>(scene, options.pipeline);
@@ -242,10 +276,10 @@ std::variant<MeshRun<2>, MeshRun<3>> mesh_scene(const Comm& comm, const std::str
       }
       if (distributed) {
         parallel::MeshOptions o{.pipeline = run.options.pipeline,
-                                .partitions = options.partitions > 0 ? options.partitions : comm.size(),
+                                .partitions = run.options.partitions > 0 ? run.options.partitions : comm.size(),
                                 .partitioning = {},
                                 .ghost = options.ghost};
-        if (options.stream.empty()) {
+        if (run.options.stream.empty()) {
           run.mesh = parallel::mesh_distributed<Dim>(comm, std::move(scene), o);
         } else {
           run.streamed = true;
@@ -256,7 +290,7 @@ std::variant<MeshRun<2>, MeshRun<3>> mesh_scene(const Comm& comm, const std::str
           const std::vector<geometry::Phase> phases = scene.phases;
           std::uint64_t checksum = 0;
           PhaseTimes figures;
-          run.mesh = parallel::mesh_streamed<Dim>(comm, std::move(scene), o, options.stream, write,
+          run.mesh = parallel::mesh_streamed<Dim>(comm, std::move(scene), o, run.options.stream, write,
                                                   [&](const mesh::SimplexMesh<Dim>& part) {
                                                     ScopedPhase timer(&figures, "quality");
                                                     add_figures(run, part, phases, checksum);
@@ -281,7 +315,7 @@ std::variant<MeshRun<2>, MeshRun<3>> mesh_scene(const Comm& comm, const std::str
 }
 
 Output plan_output(const Comm& comm, const std::string& requested, bool gather, bool distributed,
-                   const std::string& format, io::PlaneKind plane, int streamed_partitions) {
+                   const std::string& format, io::PlaneKind plane) {
   namespace fs = std::filesystem;
   const std::string extension = format.empty() ? fs::path(requested).extension().string() : "." + format;
   Output out;
@@ -298,8 +332,7 @@ Output plan_output(const Comm& comm, const std::string& requested, bool gather, 
                                           " file on rank 0");
   });
   if (out.pieces)
-    for (int r = 0; r < (streamed_partitions > 0 ? streamed_partitions : comm.size()); ++r)
-      out.piece_paths.push_back(parallel::piece_path(out.path, r));
+    for (int r = 0; r < comm.size(); ++r) out.piece_paths.push_back(parallel::piece_path(out.path, r));
   return out;
 }
 

@@ -28,6 +28,9 @@ struct Options {
   // --stream: the .pvtu to write while meshing (parallel/stream.hpp), partitions one after
   // another on each rank; empty: the mesh is assembled in memory and written after.
   std::string stream;
+  // The .pvtu a parallel run writes when it is asked for pieces: the mesh is streamed there
+  // when its estimate would not fit in memory (and it can be streamed), instead of refused.
+  std::string stream_if_needed;
   parallel::GhostRule ghost;
   double bound = 0;     // aspect-ratio bound of the statistics (0: 3 in 2D, 5 in 3D)
   bool figures = true;  // per-phase counts and measures, checksum (a pass and a sort over the cells)
@@ -95,6 +98,7 @@ struct MeshRun {
   double total_seconds = 0;                    // slowest rank (finish)
   RankSpread peak_rss_bytes;                   // each rank's peak resident memory so far (finish)
   bool streamed = false;                       // written while meshing (Options::stream): no piece
+  std::string note;                            // what the run decided for the user (printed by the app)
 };
 
 // The box whose faces hold the mesh's boundary nodes, coordinate for coordinate: the
@@ -129,10 +133,8 @@ struct Output {
 // `format` ("vtu", "msh", "inp", "mesh"; empty: from the extension) names the format of a
 // path without one, such as "-"; `plane` the 2D Abaqus element type. Throws InputError on
 // every rank.
-// `streamed_partitions` > 0: a streamed run (Options::stream), one piece per partition.
 Output plan_output(const Comm& comm, const std::string& requested, bool gather, bool distributed,
-                   const std::string& format = "", io::PlaneKind plane = io::PlaneKind::stress,
-                   int streamed_partitions = 0);
+                   const std::string& format = "", io::PlaneKind plane = io::PlaneKind::stress);
 
 // Writes the mesh where `output` says and, with `svg` given, a picture of it (3D: the slice
 // by Options::svg_slice) (timed as "write").

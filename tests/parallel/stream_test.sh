@@ -3,8 +3,9 @@
 # .vtu pieces of their own. On a 2D and a 3D example: the streamed mesh is the sequential
 # one (report checksum), on 1 rank and under mpiexec; VTK reads the pieces back and finds
 # exactly the in-memory path's mesh for the same partitions (global id -> point, cells as
-# global ids with their phase); certify checks the streamed .pvtu against the scene; what
-# --stream cannot do is refused with exit 2, one line and no file left (no spool either).
+# global ids with their phase); certify checks the streamed .pvtu against the scene; a mesh
+# beyond what memory holds is streamed unasked when pieces are the output; what --stream
+# cannot do is refused with exit 2, one line and no file left (no spool either).
 # usage: stream_test.sh CISAMR EXAMPLES_DIR [MPIEXEC]
 set -u
 cisamr=$1 examples=$2 mpiexec=${3:-}
@@ -88,6 +89,14 @@ for scene in "$examples/composite.json" "$examples/spheres3d.json"; do
   fi
 done
 
+# Chosen automatically: pieces asked for, an estimate beyond what memory holds (here
+# --max-elements) streams instead of refusing, with a note; the same mesh.
+"$cisamr" mesh "$examples/composite.json" -o "$dir/auto.pvtu" --partitions 2 --max-elements 20000 \
+  --report "$dir/auto.json" > /dev/null 2> "$dir/auto.err" || fail "automatic stream: $(cat "$dir/auto.err")"
+grep -q "streamed over [0-9]* partitions" "$dir/auto.err" || fail "automatic stream: no note ($(cat "$dir/auto.err"))"
+[ "$(checksum "$dir/auto.json")" = "$(checksum "$dir/composite-seq.json")" ] || fail "automatic stream: checksum differs"
+[ "$(ls "$dir" | grep -c '^auto_[0-9]*\.vtu$')" -ge 8 ] || fail "automatic stream: fewer than 8 pieces"
+
 # Refused before any work: exit 2, one line naming the option or field, nothing written.
 refused() {  # refused WHAT ARGS...
   local what=$1
@@ -106,4 +115,5 @@ refused "not .pvtu" "$examples/composite.json" -o "$dir/bad/x.msh" --stream
 refused "--svg" "$examples/composite.json" -o "$dir/bad/x.pvtu" --stream --svg "$dir/bad/x.svg"
 refused "--cohesive" "$examples/composite.json" -o "$dir/bad/x.pvtu" --stream --cohesive
 refused "periodic" "$examples/rve3d.json" -o "$dir/bad/x.pvtu" --stream
+refused "beyond --max-elements, one file" "$examples/composite.json" -o "$dir/bad/x.vtu" --max-elements 20000
 echo "stream_test: ok"
