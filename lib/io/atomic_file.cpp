@@ -21,7 +21,7 @@ constexpr std::size_t kBufferSize = 1 << 20;  // large writes bypass it
 // ---- Registry of live temporaries, read by the signal handler ----------------------------
 // Fixed-size C strings so that the handler touches no allocator and no lock. A slot is
 // free (0), being filled (1) or live (2); the handler only reads live slots.
-constexpr int kRegistrySlots = 64;
+constexpr int kRegistrySlots = 1024;  // a streamed run holds a spool and a piece per partition
 constexpr std::size_t kRegistryPathBytes = 4096;
 struct RegistrySlot {
   std::atomic<int> state{0};
