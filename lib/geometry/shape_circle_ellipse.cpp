@@ -283,24 +283,39 @@ namespace {
 // Closed boundary polyline: n points at equal parameter steps.
 std::vector<Vec3> ellipse_polyline(const Ellipse& e, int n) {
   std::vector<Vec3> out;
+  out.reserve(static_cast<std::size_t>(n));
   const double cs = std::cos(e.angle), sn = std::sin(e.angle);
+  // The points of equal parameter steps by rotation (a partition's load field samples
+  // millions of them), re-anchored on the exact angle every 64 steps so that rounding does
+  // not drift.
+  const double step = 2 * M_PI / n, cos_step = std::cos(step), sin_step = std::sin(step);
+  double c = 1, s = 0;
   for (int i = 0; i < n; ++i) {
-    const double t = 2 * M_PI * i / n;
-    const double x = e.semi_axes[0] * std::cos(t), y = e.semi_axes[1] * std::sin(t);
+    if (i % 64 == 0) c = std::cos(step * i), s = std::sin(step * i);
+    const double x = e.semi_axes[0] * c, y = e.semi_axes[1] * s;
     out.push_back({e.center[0] + cs * x - sn * y, e.center[1] + sn * x + cs * y, 0});
+    const double next_c = c * cos_step - s * sin_step;
+    s = s * cos_step + c * sin_step;
+    c = next_c;
   }
   return out;
 }
 
 double ellipse_perimeter(double a, double b) {
-  // The trapezoid rule is spectrally accurate for this smooth periodic integrand.
-  const int n = 4096;
-  double s = 0;
-  for (int i = 0; i < n; ++i) {
-    const double t = 2 * M_PI * (i + 0.5) / n;
-    s += std::hypot(a * std::sin(t), b * std::cos(t));
+  // Gauss–Kummer through the arithmetic-geometric mean: exact for every ratio of the axes,
+  // converged to the last bit in a handful of steps (it replaced a 4,096-point trapezoid rule
+  // that made the partitioner's load field of 11,200 ellipses take seconds).
+  double an = std::max(a, b), gn = std::min(a, b);
+  double sum = 0.5 * (an * an - gn * gn), power = 1;
+  for (int i = 0; i < 64 && an - gn > 1e-15 * an; ++i) {  // then the next term is below 1e-28
+    const double c = 0.5 * (an - gn);
+    const double next_g = std::sqrt(an * gn);
+    an = 0.5 * (an + gn);
+    gn = next_g;
+    power *= 2;
+    sum += 0.5 * power * c * c;
   }
-  return s * 2 * M_PI / n;
+  return 2 * M_PI * (std::max(a, b) * std::max(a, b) - sum) / (0.5 * (an + gn));
 }
 
 class CircleFamily final : public FamilyOf<Circle> {

@@ -50,7 +50,7 @@ class Accumulator {
     for (std::size_t i = 0, n = pts.size(); i < n; ++i) {
       const Vec2& a = pts[i];
       const Vec2& b = pts[(i + 1) % n];
-      const double len = std::hypot(b[0] - a[0], b[1] - a[1]);
+      const double len = std::sqrt((b[0] - a[0]) * (b[0] - a[0]) + (b[1] - a[1]) * (b[1] - a[1]));
       const int pieces = std::max(1, static_cast<int>(std::ceil(len / spacing)));
       for (int k = 0; k < pieces; ++k) {
         const double t = (k + 0.5) / pieces;
@@ -240,7 +240,8 @@ void add_inclusion(Accumulator& acc, const Inclusion& inc, double weight, double
     double length = 0;
     for (std::size_t i = 0, n = pts.size(); i < n; ++i) {
       poly.push_back({pts[i][0], pts[i][1]});
-      length += std::hypot(pts[(i + 1) % n][0] - pts[i][0], pts[(i + 1) % n][1] - pts[i][1]);
+      const double dx = pts[(i + 1) % n][0] - pts[i][0], dy = pts[(i + 1) % n][1] - pts[i][1];
+      length += std::sqrt(dx * dx + dy * dy);
     }
     return acc.add_polyline(poly, weight, spacing, shape_boundary_measure(inc.shape) / length);
   }
