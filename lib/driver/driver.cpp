@@ -51,11 +51,11 @@ double elements_in_memory(const Options& options) {
 // With Options::stream_if_needed: the partitions to stream over when the mesh would not fit
 // (each of `ranks` holding one partition, its ghost included, at a time), 0 when it fits or
 // cannot be streamed.
-template <int Dim>
-int partitions_to_stream(const geometry::SceneDesc& scene, const Options& options, int ranks) {
+int partitions_to_stream(const geometry::SceneDesc& scene, const pipeline::MeshEstimate& estimate, const Options& options,
+                         int ranks) {
   if (options.stream_if_needed.empty() || !options.stream.empty()) return 0;
   if (options.pipeline.cohesive || scene.any_periodic()) return 0;
-  const double elements = pipeline::estimate_mesh<Dim>(scene).total();
+  const double elements = estimate.total();
   const double fits = elements_in_memory(options);
   if (elements <= fits) return 0;
   const double needed = std::ceil(kStreamedPartitionsInFlight * elements / fits) * ranks;
@@ -65,8 +65,7 @@ int partitions_to_stream(const geometry::SceneDesc& scene, const Options& option
 // Refuses, before any memory is taken, a mesh estimated above Options::max_elements, and
 // more partitions than coarse cells. Throws InputError naming the scene's field.
 template <int Dim>
-void check_request(const geometry::SceneDesc& scene, const Options& options) {
-  const pipeline::MeshEstimate estimate = pipeline::estimate_mesh<Dim>(scene);
+void check_request(const geometry::SceneDesc& scene, const pipeline::MeshEstimate& estimate, const Options& options) {
   const double memory = physical_memory();
   // Streamed, a rank holds one partition at a time (its ghost included).
   const double streamed_share =
@@ -255,18 +254,20 @@ std::variant<MeshRun<2>, MeshRun<3>> mesh_scene(const Comm& comm, const std::str
     run.ranks = comm.size();
     run.start = start;
     run.bound = options.bound > 0 ? options.bound : Dim == 2 ? 3.0 : 5.0;
+    pipeline::MeshEstimate estimate;  // the same on every rank: from the descriptors
+    parallel::run_collectively(comm, [&] { estimate = pipeline::estimate_mesh<Dim>(scene); });
     if (distributed) {
       int partitions = 0;
-      parallel::run_collectively(comm, [&] { partitions = partitions_to_stream<Dim>(scene, options, comm.size()); });
+      parallel::run_collectively(comm, [&] { partitions = partitions_to_stream(scene, estimate, options, comm.size()); });
       if (partitions > 0) {
         run.options.stream = options.stream_if_needed;
         run.options.partitions = partitions;
-        run.note = "the mesh would have about " + about(pipeline::estimate_mesh<Dim>(scene).total()) +
+        run.note = "the mesh would have about " + about(estimate.total()) +
                    " elements, more than the " + about(elements_in_memory(options)) +
                    " held in memory: streamed over " + std::to_string(partitions) + " partitions (--stream)";
       }
     }
-    parallel::run_collectively(comm, [&] { check_request<Dim>(scene, run.options); });
+    parallel::run_collectively(comm, [&] { check_request<Dim>(scene, estimate, run.options); });
     try {
       run.face_box = face_box<Dim>(scene, options.pipeline);  // builds the lattice: may refuse the scene
       const grid::Lattice<Dim> lattice = pipeline::make_lattice<Dim>(scene, options.pipeline);

@@ -109,6 +109,20 @@ bool on_inner_face_of(std::uint64_t key, const grid::CellRange<Dim>& box, const 
   return false;
 }
 
+// The (key, value) pairs packed one after another in every rank's bytes.
+template <class Key, class Value>
+std::vector<std::pair<Key, Value>> unpack_pairs(const std::vector<Bytes>& received) {
+  std::vector<std::pair<Key, Value>> out;
+  for (const Bytes& b : received) {
+    Unpacker u(b);
+    while (!u.done()) {
+      const auto key = u.get<Key>();
+      out.emplace_back(key, u.get<Value>());
+    }
+  }
+  return out;
+}
+
 template <class Key>
 std::size_t home_rank(const Comm& comm, const Key& key) {
   return static_cast<std::size_t>(hash_of(key) % static_cast<std::uint64_t>(comm.size()));
@@ -158,15 +172,7 @@ std::vector<std::pair<Key, std::int32_t>> lowest_claims(const Comm& comm, const 
   }
   for (std::size_t r = 0; r < size; ++r) send[r] = replies[r].take();
   received = comm.alltoallv(send);
-  std::vector<std::pair<Key, std::int32_t>> out;
-  for (const Bytes& b : received) {
-    Unpacker u(b);
-    while (!u.done()) {
-      const auto key = u.get<Key>();
-      out.emplace_back(key, u.get<std::int32_t>());
-    }
-  }
-  return out;
+  return unpack_pairs<Key, std::int32_t>(received);
 }
 
 // Collective. The owners' (key, global id) reach every claimant of the key (lowest_claims'
@@ -186,14 +192,7 @@ std::vector<std::pair<Key, std::int64_t>> forward_ids(const Comm& comm, const st
   std::vector<Bytes> received = comm.alltoallv(send);
   std::vector<Packer> forward(size);
   run_collectively(comm, [&] {
-    std::vector<std::pair<Key, std::int64_t>> known;
-    for (const Bytes& b : received) {
-      Unpacker u(b);
-      while (!u.done()) {
-        const auto key = u.get<Key>();
-        known.emplace_back(key, u.get<std::int64_t>());
-      }
-    }
+    std::vector<std::pair<Key, std::int64_t>> known = unpack_pairs<Key, std::int64_t>(received);
     std::sort(known.begin(), known.end());
     for (const Claim<Key>& c : held) {
       const auto it = std::lower_bound(known.begin(), known.end(), std::make_pair(c.key, std::int64_t{-1}));
@@ -205,15 +204,7 @@ std::vector<std::pair<Key, std::int64_t>> forward_ids(const Comm& comm, const st
   });
   for (std::size_t r = 0; r < size; ++r) send[r] = forward[r].take();
   received = comm.alltoallv(send);
-  std::vector<std::pair<Key, std::int64_t>> out;
-  for (const Bytes& b : received) {
-    Unpacker u(b);
-    while (!u.done()) {
-      const auto key = u.get<Key>();
-      out.emplace_back(key, u.get<std::int64_t>());
-    }
-  }
-  return out;
+  return unpack_pairs<Key, std::int64_t>(received);
 }
 
 }  // namespace merge_detail
