@@ -102,7 +102,7 @@ refused() {  # refused WHAT ARGS...
   local what=$1
   shift
   local out
-  out=$("$cisamr" mesh "$@" 2>&1 >/dev/null)
+  out=$("$cisamr" mesh "$@" --report "$dir/bad/report.json" 2>&1 >/dev/null)
   local code=$?
   [ "$code" = 2 ] || fail "$what: exit $code, expected 2 ($out)"
   [ "$(printf '%s\n' "$out" | wc -l)" = 1 ] || fail "$what: more than one line: $out"
@@ -116,4 +116,19 @@ refused "--svg" "$examples/composite.json" -o "$dir/bad/x.pvtu" --stream --svg "
 refused "--cohesive" "$examples/composite.json" -o "$dir/bad/x.pvtu" --stream --cohesive
 refused "periodic" "$examples/rve3d.json" -o "$dir/bad/x.pvtu" --stream
 refused "beyond --max-elements, one file" "$examples/composite.json" -o "$dir/bad/x.vtu" --max-elements 20000
+# A failure after meshing, while the pieces are written (piece 3's path is a directory):
+# exit 2 naming it, and no piece, .pvtu, spool or report left, on 1 rank and on 3 (the
+# piece then belongs to rank 1).
+failed_write() {  # failed_write LAUNCHER...
+  rm -rf "$dir/mid" && mkdir -p "$dir/mid/x_3.vtu"
+  local out
+  out=$("$@" "$cisamr" mesh "$examples/composite.json" -o "$dir/mid/x.pvtu" --stream --partitions 7 \
+        --report "$dir/mid/r.json" 2>&1 >/dev/null)
+  local code=$?
+  [ "$code" = 2 ] || fail "a piece that cannot be written: exit $code ($out)"
+  printf '%s\n' "$out" | grep -q "x_3.vtu" || fail "a piece that cannot be written: not named ($out)"
+  [ "$(ls -A "$dir/mid")" = "x_3.vtu" ] || fail "a piece that cannot be written: left $(ls -A "$dir/mid")"
+}
+failed_write env
+[ -n "$mpiexec" ] && failed_write run_mpi 3
 echo "stream_test: ok"
