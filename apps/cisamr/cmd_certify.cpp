@@ -1,10 +1,14 @@
-// cisamr certify MESH [--scene SCENE] [--html R.html] [--json R.json] [--bound X]
+// cisamr certify MESH [--scene SCENE] [--html R.html] [--json R.json] [--bound X] [--whole]
 // Checks any mesh io::read_mesh can read: aspect ratio against the bound, conformity, and
-// (with --scene) phase fidelity, 2D and 3D. A mesh with cohesive cells is certified on its
+// (with --scene) phase fidelity, 2D and 3D. A .pvtu with global ids is checked piece by
+// piece (quality::PiecewiseCertifier), unless --whole or what it holds asks for the merged mesh. A mesh with cohesive cells is certified on its
 // bulk welded by exact coordinates (quality::weld_view), and its cohesive cells and sets
 // are checked too (quality::certify_cohesive). Exit status 3 when the mesh fails, 0 when it passes.
 #include <cstdio>
+#include <algorithm>
+#include <cctype>
 #include <exception>
+#include <filesystem>
 #include <map>
 #include <memory>
 #include <optional>
@@ -19,6 +23,7 @@
 #include "io/scene_io.hpp"
 #include "quality/certificate.hpp"
 #include "quality/phase_match.hpp"
+#include "quality/pieces.hpp"
 
 namespace cisamr::app {
 namespace {
@@ -27,6 +32,7 @@ struct CertifyArgs {
   std::string mesh, scene, html, json, phase_map;
   double bound = 0;  // 0: the dimension's bound
   double fidelity_tolerance = -1;  // < 0: 1e-9 of the domain diagonal
+  bool whole = false;              // a .pvtu merged and read whole, not piece by piece
 };
 
 void progress(const GlobalFlags& flags, const char* what) {
@@ -72,25 +78,35 @@ quality::Certificate certify_mesh(const mesh::SimplexMesh<Dim>& mesh, const geom
   return quality::certify<Dim>(mesh, oracle, options);
 }
 
-// The mesh's phase ids made the scene's: by --phase-map, by the names the file gives, by number.
-std::string match_scene_phases(const CertifyArgs& args, io::LoadedMesh& loaded, const geometry::SceneDesc& scene) {
-  std::vector<quality::MeshPhase> mesh_phases;
+std::vector<quality::MeshPhase> mesh_phases_of(const io::LoadedMesh& loaded) {
+  std::vector<quality::MeshPhase> phases;
   for (const geometry::Phase& p : loaded.phases) {
     const auto named = loaded.phase_names_in_file.find(p.id);
-    mesh_phases.push_back({p.id, named != loaded.phase_names_in_file.end() ? named->second : ""});
+    phases.push_back({p.id, named != loaded.phase_names_in_file.end() ? named->second : ""});
   }
-  const std::map<int, int> scene_id = quality::match_phases(
-      mesh_phases, scene.phases, args.phase_map.empty() ? std::vector<quality::PhaseMapEntry>{}
-                                                        : quality::parse_phase_map(args.phase_map),
-      args.mesh);
-  if (loaded.dimension == 2) quality::relabel_phases<2>(loaded.mesh2, scene_id);
-  else quality::relabel_phases<3>(loaded.mesh3, scene_id);
+  return phases;
+}
+
+std::vector<quality::PhaseMapEntry> phase_map_of(const CertifyArgs& args) {
+  return args.phase_map.empty() ? std::vector<quality::PhaseMapEntry>{} : quality::parse_phase_map(args.phase_map);
+}
+
+std::string phase_match_note(const std::vector<quality::MeshPhase>& mesh_phases, const std::map<int, int>& scene_id) {
   std::string note = "mesh phases matched to the scene:";
   for (const quality::MeshPhase& m : mesh_phases)
     note += " " + (m.name.empty() ? std::to_string(m.id) : "'" + m.name + "'") + " -> " +
             std::to_string(scene_id.at(m.id)) + ",";
   note.pop_back();
   return note;
+}
+
+// The mesh's phase ids made the scene's: by --phase-map, by the names the file gives, by number.
+std::string match_scene_phases(const CertifyArgs& args, io::LoadedMesh& loaded, const geometry::SceneDesc& scene) {
+  const std::vector<quality::MeshPhase> mesh_phases = mesh_phases_of(loaded);
+  const std::map<int, int> scene_id = quality::match_phases(mesh_phases, scene.phases, phase_map_of(args), args.mesh);
+  if (loaded.dimension == 2) quality::relabel_phases<2>(loaded.mesh2, scene_id);
+  else quality::relabel_phases<3>(loaded.mesh3, scene_id);
+  return phase_match_note(mesh_phases, scene_id);
 }
 
 // The frame in which facets on the periodic planes are checked too: a periodic scene's faces
@@ -140,25 +156,29 @@ std::optional<quality::CohesiveSection> certify_cohesive_cells(const io::LoadedM
   return quality::certify_cohesive<Dim>(mesh, sets ? &*sets : nullptr, periodic ? &*periodic : nullptr);
 }
 
+// The scene of --scene (none without), of the mesh's dimension.
+std::optional<geometry::SceneDesc> read_scene_of(const CertifyArgs& args, int dimension, const GlobalFlags& flags,
+                                                 PhaseTimes& times) {
+  if (args.scene.empty()) {
+    if (!args.phase_map.empty()) throw InputError("--phase-map", "", "needs --scene (the phases are mapped to the scene's)");
+    return std::nullopt;
+  }
+  progress(flags, "reading the scene");
+  ScopedPhase timer(&times, "read scene");
+  geometry::SceneDesc scene = io::read_scene(args.scene);
+  if (scene.dimension != dimension)
+    throw InputError(args.scene, "dimension",
+                     "the scene is " + std::to_string(scene.dimension) + "D but the mesh " + args.mesh + " is " +
+                         std::to_string(dimension) + "D");
+  return scene;
+}
+
 quality::Certificate certify_loaded(const CertifyArgs& args, io::LoadedMesh& loaded,
                                     const GlobalFlags& flags, PhaseTimes& times) {
   quality::CertifyOptions options;
   options.bound = args.bound;
   options.fidelity_tolerance = args.fidelity_tolerance;
-  std::optional<geometry::SceneDesc> scene;
-  if (!args.scene.empty()) {
-    progress(flags, "reading the scene");
-    {
-      ScopedPhase timer(&times, "read scene");
-      scene = io::read_scene(args.scene);
-    }
-    if (scene->dimension != loaded.dimension)
-      throw InputError(args.scene, "dimension",
-                       "the scene is " + std::to_string(scene->dimension) + "D but the mesh " + args.mesh + " is " +
-                           std::to_string(loaded.dimension) + "D");
-  } else if (!args.phase_map.empty()) {
-    throw InputError("--phase-map", "", "needs --scene (the phases are mapped to the scene's)");
-  }
+  const std::optional<geometry::SceneDesc> scene = read_scene_of(args, loaded.dimension, flags, times);
   const geometry::SceneDesc* scene_or_none = scene ? &*scene : nullptr;
   const std::optional<quality::CohesiveSection> cohesive =
       loaded.dimension == 2 ? certify_cohesive_cells<2>(loaded, loaded.mesh2, scene_or_none, flags, times)
@@ -170,6 +190,114 @@ quality::Certificate certify_loaded(const CertifyArgs& args, io::LoadedMesh& loa
   if (!match_note.empty()) c.notes.push_back(match_note);
   c.cohesive = cohesive;
   return c;
+}
+
+// The map entries that name a phase of `phases` (a piece need not hold every phase the map
+// names; the whole map is checked against all pieces' phases at the end).
+std::vector<quality::PhaseMapEntry> entries_naming(const std::vector<quality::PhaseMapEntry>& map,
+                                                   const std::vector<quality::MeshPhase>& phases) {
+  std::vector<quality::PhaseMapEntry> named;
+  for (const quality::PhaseMapEntry& e : map)
+    if (std::any_of(phases.begin(), phases.end(),
+                    [&](const quality::MeshPhase& p) { return e.mesh == std::to_string(p.id) || e.mesh == p.name; }))
+      named.push_back(e);
+  return named;
+}
+
+// A .pvtu certified piece by piece (quality::PiecewiseCertifier): two passes, the first over
+// the pieces' points and global ids only. nullopt when it must be read whole: a piece without
+// global ids, with cohesive cells or periodic masters, ids too sparse, a periodic scene.
+template <int Dim>
+std::optional<quality::Certificate> certify_pieces(const CertifyArgs& args, const std::vector<std::string>& pieces,
+                                                   io::VtuPoints first, const geometry::SceneDesc* scene,
+                                                   std::vector<geometry::Phase>& phases, const GlobalFlags& flags,
+                                                   PhaseTimes& times) {
+  quality::CertifyOptions options;
+  options.bound = args.bound;
+  options.fidelity_tolerance = args.fidelity_tolerance;
+  std::optional<geometry::Oracle<Dim>> oracle;
+  if (scene) {
+    progress(flags, "building the geometry oracle");
+    ScopedPhase timer(&times, "oracle");
+    oracle.emplace(*scene);
+  }
+  quality::PiecewiseCertifier<Dim> certifier(options, oracle ? &*oracle : nullptr);
+  {
+    progress(flags, "reading the pieces' global node ids");
+    ScopedPhase timer(&times, "read ids");
+    for (std::size_t k = 0; k < pieces.size(); ++k) {
+      io::VtuPoints points = k == 0 ? std::move(first) : io::read_vtu_points(pieces[k]);
+      if (!points.has_global_id || points.has_cohesive || points.has_periodic_master) return std::nullopt;
+      certifier.count_nodes(points.global_id, points.coords);
+    }
+    if (!certifier.ids_usable()) return std::nullopt;
+  }
+  const std::vector<quality::PhaseMapEntry> map = phase_map_of(args);
+  std::vector<quality::MeshPhase> all_phases;
+  std::map<int, int> scene_id;
+  for (std::size_t k = 0; k < pieces.size(); ++k) {
+    if (show_progress(flags))
+      std::fprintf(stderr, "cisamr: checking piece %zu of %zu\n", k + 1, pieces.size());
+    io::LoadedMesh loaded;
+    {
+      ScopedPhase timer(&times, "read mesh");
+      loaded = io::read_mesh(pieces[k]);
+    }
+    if (loaded.dimension != Dim)
+      throw InputError(pieces[k], "", "is " + std::to_string(loaded.dimension) + "D, the first piece " +
+                                          std::to_string(Dim) + "D");
+    mesh::SimplexMesh<Dim>& piece = [&]() -> mesh::SimplexMesh<Dim>& {
+      if constexpr (Dim == 2) return loaded.mesh2;
+      else return loaded.mesh3;
+    }();
+    const std::vector<quality::MeshPhase> here = mesh_phases_of(loaded);  // in the order of loaded.phases
+    for (std::size_t i = 0; i < here.size(); ++i)
+      if (std::none_of(all_phases.begin(), all_phases.end(), [&](const auto& q) { return q.id == here[i].id; })) {
+        all_phases.push_back(here[i]);
+        phases.push_back(loaded.phases[i]);
+      }
+    if (scene)
+      quality::relabel_phases<Dim>(piece, quality::match_phases(here, scene->phases, entries_naming(map, here), pieces[k]));
+    ScopedPhase timer(&times, "certify");
+    certifier.add_piece(piece, pieces[k]);
+  }
+  std::sort(all_phases.begin(), all_phases.end(), [](const auto& a, const auto& b) { return a.id < b.id; });
+  std::sort(phases.begin(), phases.end(), [](const auto& a, const auto& b) { return a.id < b.id; });
+  ScopedPhase timer(&times, "certify");
+  quality::Certificate c = certifier.finish();
+  if (!scene) {
+    c.notes.push_back("no scene: the domain is the mesh's bounding box, phase fidelity is not checked and "
+                      "open boundaries inside it are taken for voids");
+  } else {
+    c.notes.push_back(phase_match_note(all_phases, quality::match_phases(all_phases, scene->phases, map, args.mesh)));
+  }
+  return c;
+}
+
+// A .pvtu with global ids, piece by piece; nullopt when it must be read whole.
+std::optional<quality::Certificate> certify_pvtu_by_pieces(const CertifyArgs& args, std::vector<geometry::Phase>& phases,
+                                                           const GlobalFlags& flags, PhaseTimes& times) {
+  const std::vector<std::string> pieces = io::pvtu_piece_paths(args.mesh);
+  io::VtuPoints first = io::read_vtu_points(pieces.front());
+  // Tetrahedra have a z extent; triangles of a 2D mesh lie at z = 0 (io::read_mesh's rule).
+  bool flat = true;
+  for (std::size_t i = 2; i < first.coords.size() && flat; i += 3) flat = first.coords[i] == 0;
+  const int dimension = flat ? 2 : 3;
+  const std::optional<geometry::SceneDesc> scene = read_scene_of(args, dimension, flags, times);
+  if (scene && scene->any_periodic()) return std::nullopt;
+  const geometry::SceneDesc* scene_or_none = scene ? &*scene : nullptr;
+  std::optional<quality::Certificate> c =
+      dimension == 2 ? certify_pieces<2>(args, pieces, std::move(first), scene_or_none, phases, flags, times)
+                     : certify_pieces<3>(args, pieces, std::move(first), scene_or_none, phases, flags, times);
+  if (c && c->phase_names.empty())
+    for (const geometry::Phase& p : phases) c->phase_names.emplace_back(p.id, p.name);
+  return c;
+}
+
+bool has_extension(const std::string& path, const char* extension) {
+  std::string e = std::filesystem::path(path).extension().string();
+  for (char& ch : e) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+  return e == extension;
 }
 
 }  // namespace
@@ -187,6 +315,9 @@ void add_certify_command(CLI::App& app, GlobalFlags& flags, int& exit_code) {
   cmd->add_option("--phase-map", args->phase_map,
                   "With --scene: mesh phases to scene phases, MESH=SCENE,... (ids or names; default: by the names "
                   "the file gives, else by id)");
+  cmd->add_flag("--whole", args->whole,
+               "Read a .pvtu whole, its pieces merged by global id (by default it is certified piece by piece, "
+               "in memory bounded by the largest piece and the border between pieces)");
   cmd->add_option("--html", args->html, "Write the certificate as a self-contained HTML page")->check(output_path());
   cmd->add_option("--json", args->json, "Write the certificate as JSON")->check(output_path());
   cmd->add_option("--bound", args->bound,
@@ -199,16 +330,24 @@ void add_certify_command(CLI::App& app, GlobalFlags& flags, int& exit_code) {
       ->check(number_in(1e-300, 1e300));
   cmd->callback([args, &flags, &exit_code] {
     PhaseTimes times;
-    progress(flags, "reading the mesh");
-    io::LoadedMesh loaded;
-    {
-      ScopedPhase timer(&times, "read mesh");
-      loaded = io::read_mesh(args->mesh);
+    std::optional<quality::Certificate> by_pieces;
+    std::vector<geometry::Phase> piece_phases;
+    if (has_extension(args->mesh, ".pvtu") && !args->whole) by_pieces = certify_pvtu_by_pieces(*args, piece_phases, flags, times);
+    quality::Certificate c;
+    if (by_pieces) {
+      c = std::move(*by_pieces);
+    } else {
+      progress(flags, "reading the mesh");
+      io::LoadedMesh loaded;
+      {
+        ScopedPhase timer(&times, "read mesh");
+        loaded = io::read_mesh(args->mesh);
+      }
+      c = certify_loaded(*args, loaded, flags, times);
+      if (c.phase_names.empty())
+        for (const geometry::Phase& p : loaded.phases) c.phase_names.emplace_back(p.id, p.name);
     }
-    quality::Certificate c = certify_loaded(*args, loaded, flags, times);
     c.mesh_source = args->mesh;
-    if (c.phase_names.empty())
-      for (const geometry::Phase& p : loaded.phases) c.phase_names.emplace_back(p.id, p.name);
     {
       ScopedPhase timer(&times, "write");
       io::OutputSet outputs;  // both certificates or neither

@@ -166,4 +166,19 @@ struct LoadedMesh {
 // before anything is reserved.
 LoadedMesh read_mesh(const std::string& path);
 
+// The .vtu pieces a .pvtu lists, in order, as paths (relative ones resolved against the
+// .pvtu's folder).
+std::vector<std::string> pvtu_piece_paths(const std::string& path);
+
+// A .vtu piece's points and global ids, nothing else decoded (a mapped file's other arrays
+// are not read from disk): the first pass of reading a partitioned mesh piece by piece.
+struct VtuPoints {
+  std::vector<double> coords;         // 3 per point
+  std::vector<GlobalId> global_id;    // per point, when the piece has global_id
+  bool has_global_id = false;
+  bool has_cohesive = false;          // cell data `cohesive` (cohesive cells may be there)
+  bool has_periodic_master = false;   // point data `periodic_master`
+};
+VtuPoints read_vtu_points(const std::string& path);
+
 }  // namespace cisamr::io

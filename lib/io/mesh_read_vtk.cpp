@@ -463,55 +463,10 @@ class VtuReader {
   VtuReader(std::string_view text, const std::string& path) : text_(text), path_(path) {}
 
   RawMesh read() {
-    // The appended block is not XML: the XML is what comes before it, closed.
-    const std::size_t appended_tag = text_.find("<AppendedData");
-    std::string xml(text_.substr(0, appended_tag));
-    if (appended_tag != std::string_view::npos) {
-      const std::size_t close = text_.find('>', appended_tag);
-      if (close == std::string_view::npos) throw InputError(path_, "AppendedData", "unterminated tag");
-      const std::string_view opening = text_.substr(appended_tag, close - appended_tag);
-      appended_.base64 = opening.find("\"base64\"") != std::string_view::npos;
-      if (!appended_.base64 && opening.find("\"raw\"") == std::string_view::npos)
-        throw InputError(path_, "AppendedData", "encoding must be \"raw\" or \"base64\"");
-      const std::size_t underscore = text_.find('_', close);
-      if (underscore == std::string_view::npos) throw InputError(path_, "AppendedData", "no '_' before the data");
-      appended_.present = true;
-      appended_.data = text_.substr(underscore + 1);
-      if (appended_.base64) appended_.data = appended_.data.substr(0, appended_.data.find('<'));
-      xml += "</VTKFile>";
-    }
     pugi::xml_document doc;
-    const pugi::xml_parse_result parsed = doc.load_buffer_inplace(xml.data(), xml.size(), pugi::parse_default);
-    if (!parsed) {
-      const auto offset = std::min(static_cast<std::size_t>(std::max<std::ptrdiff_t>(parsed.offset, 0)), xml.size());
-      const auto line = 1 + std::count(xml.begin(), xml.begin() + static_cast<std::ptrdiff_t>(offset), '\n');
-      throw InputError(path_, "line " + std::to_string(line), std::string("not well-formed XML: ") + parsed.description());
-    }
-    const pugi::xml_node root = doc.child("VTKFile");
-    if (!root) throw InputError(path_, "", "not a VTK XML file (no <VTKFile>)");
-    const std::string type = root.attribute("type").value();
-    if (type != "UnstructuredGrid")
-      throw InputError(path_, "VTKFile type", "'" + type.substr(0, 40) + "', expected UnstructuredGrid");
-    if (std::string(root.attribute("byte_order").as_string("LittleEndian")) != "LittleEndian")
-      throw InputError(path_, "VTKFile byte_order", "big-endian VTU files are not supported");
-    const std::string header = root.attribute("header_type").as_string("UInt32");
-    if (header != "UInt32" && header != "UInt64")
-      throw InputError(path_, "VTKFile header_type", "unsupported '" + header.substr(0, 40) + "'");
-    format_.header_bytes = header == "UInt64" ? 8 : 4;
-    const std::string compressor = root.attribute("compressor").value();
-    if (!compressor.empty() && compressor != "vtkZLibDataCompressor")
-      throw InputError(path_, "VTKFile compressor", "'" + compressor.substr(0, 40) +
-                                                        "' is not supported (vtkZLibDataCompressor is)");
-    format_.compressed = !compressor.empty();
-
-    const pugi::xml_node grid = root.child("UnstructuredGrid");
-    if (!grid) throw InputError(path_, "UnstructuredGrid", "missing");
-    const pugi::xml_node piece = grid.child("Piece");
-    if (!piece) throw InputError(path_, "Piece", "missing");
-    if (piece.next_sibling("Piece"))
-      throw InputError(path_, "Piece", "VTU files with several pieces are not supported");
-    collect_appended_offsets(grid, piece);
-
+    std::string xml;
+    const pugi::xml_node piece = open(doc, xml);
+    const pugi::xml_node grid = piece.parent();
     GridArrays g;
     // Counts are checked against the arrays, never used to reserve: any size passes here.
     const std::size_t no_limit = std::numeric_limits<std::size_t>::max() / 64;
@@ -545,7 +500,93 @@ class VtuReader {
     return assemble(g, path_);
   }
 
+  // The points and global ids only (a mapped file's other arrays are not even touched).
+  VtuPoints read_points() {
+    pugi::xml_document doc;
+    std::string xml;
+    const pugi::xml_node piece = open(doc, xml);
+    VtuPoints result;
+    const std::size_t no_limit = std::numeric_limits<std::size_t>::max() / 64;
+    const std::size_t points = size_attribute(piece, "NumberOfPoints", no_limit, path_);
+    const pugi::xml_node array = piece.child("Points").child("DataArray");
+    if (!array) throw InputError(path_, "Points", "no Points array");
+    const DataValues values = decode(array);
+    if (values.size() != 3 * points)
+      throw InputError(path_, "Points", "has " + std::to_string(values.size()) + " values, NumberOfPoints " +
+                                            std::to_string(points) + " needs 3 × as many");
+    result.coords.resize(values.size());
+    for (std::size_t i = 0; i < values.size(); ++i) result.coords[i] = values.real(i);
+    for (const pugi::xml_node a : piece.child("PointData").children("DataArray")) {
+      const std::string_view name = a.attribute("Name").value();
+      if (name == "periodic_master") result.has_periodic_master = true;
+      if (name != "global_id") continue;
+      const DataValues ids = decode(a);
+      if (ids.is_real()) throw InputError(path_, "global_id", "must be an integer array");
+      if (ids.size() != points)
+        throw InputError(path_, "global_id", "has " + std::to_string(ids.size()) + " values for " +
+                                                 std::to_string(points) + " points");
+      result.has_global_id = true;
+      result.global_id.resize(points);
+      for (std::size_t i = 0; i < points; ++i) result.global_id[i] = ids.integer(i);
+    }
+    for (const pugi::xml_node a : piece.child("CellData").children("DataArray"))
+      if (std::string_view(a.attribute("Name").value()) == "cohesive") result.has_cohesive = true;
+    return result;
+  }
+
  private:
+  // Parses the XML before the appended block into `doc` (over `xml`) and returns the piece.
+  pugi::xml_node open(pugi::xml_document& doc, std::string& xml) {
+    // The appended block is not XML: the XML is what comes before it, closed.
+    const std::size_t appended_tag = text_.find("<AppendedData");
+    xml.assign(text_.substr(0, appended_tag));
+    if (appended_tag != std::string_view::npos) {
+      const std::size_t close = text_.find('>', appended_tag);
+      if (close == std::string_view::npos) throw InputError(path_, "AppendedData", "unterminated tag");
+      const std::string_view opening = text_.substr(appended_tag, close - appended_tag);
+      appended_.base64 = opening.find("\"base64\"") != std::string_view::npos;
+      if (!appended_.base64 && opening.find("\"raw\"") == std::string_view::npos)
+        throw InputError(path_, "AppendedData", "encoding must be \"raw\" or \"base64\"");
+      const std::size_t underscore = text_.find('_', close);
+      if (underscore == std::string_view::npos) throw InputError(path_, "AppendedData", "no '_' before the data");
+      appended_.present = true;
+      appended_.data = text_.substr(underscore + 1);
+      if (appended_.base64) appended_.data = appended_.data.substr(0, appended_.data.find('<'));
+      xml += "</VTKFile>";
+    }
+    const pugi::xml_parse_result parsed = doc.load_buffer_inplace(xml.data(), xml.size(), pugi::parse_default);
+    if (!parsed) {
+      const auto offset = std::min(static_cast<std::size_t>(std::max<std::ptrdiff_t>(parsed.offset, 0)), xml.size());
+      const auto line = 1 + std::count(xml.begin(), xml.begin() + static_cast<std::ptrdiff_t>(offset), '\n');
+      throw InputError(path_, "line " + std::to_string(line), std::string("not well-formed XML: ") + parsed.description());
+    }
+    const pugi::xml_node root = doc.child("VTKFile");
+    if (!root) throw InputError(path_, "", "not a VTK XML file (no <VTKFile>)");
+    const std::string type = root.attribute("type").value();
+    if (type != "UnstructuredGrid")
+      throw InputError(path_, "VTKFile type", "'" + type.substr(0, 40) + "', expected UnstructuredGrid");
+    if (std::string(root.attribute("byte_order").as_string("LittleEndian")) != "LittleEndian")
+      throw InputError(path_, "VTKFile byte_order", "big-endian VTU files are not supported");
+    const std::string header = root.attribute("header_type").as_string("UInt32");
+    if (header != "UInt32" && header != "UInt64")
+      throw InputError(path_, "VTKFile header_type", "unsupported '" + header.substr(0, 40) + "'");
+    format_.header_bytes = header == "UInt64" ? 8 : 4;
+    const std::string compressor = root.attribute("compressor").value();
+    if (!compressor.empty() && compressor != "vtkZLibDataCompressor")
+      throw InputError(path_, "VTKFile compressor", "'" + compressor.substr(0, 40) +
+                                                        "' is not supported (vtkZLibDataCompressor is)");
+    format_.compressed = !compressor.empty();
+
+    const pugi::xml_node grid = root.child("UnstructuredGrid");
+    if (!grid) throw InputError(path_, "UnstructuredGrid", "missing");
+    const pugi::xml_node piece = grid.child("Piece");
+    if (!piece) throw InputError(path_, "Piece", "missing");
+    if (piece.next_sibling("Piece"))
+      throw InputError(path_, "Piece", "VTU files with several pieces are not supported");
+    collect_appended_offsets(grid, piece);
+    return piece;
+  }
+
   // The offsets of the appended arrays of the sections read (not a walk of the whole tree:
   // a file may nest elements deeper than any stack).
   void collect_appended_offsets(const pugi::xml_node& grid, const pugi::xml_node& piece) {
@@ -968,8 +1009,12 @@ LoadedMesh read_legacy_vtk(const std::string& path) {
   return finish(LegacyReader(file.view(), path).read(), path);
 }
 
-LoadedMesh read_pvtu(const std::string& path) {
-  const MappedFile file(path);
+}  // namespace cisamr::io::detail
+
+namespace cisamr::io {
+
+std::vector<std::string> pvtu_piece_paths(const std::string& path) {
+  const detail::MappedFile file(path);
   const std::string_view text = file.view();
   pugi::xml_document doc;
   const pugi::xml_parse_result parsed = doc.load_buffer(text.data(), text.size(), pugi::parse_default);
@@ -977,18 +1022,30 @@ LoadedMesh read_pvtu(const std::string& path) {
   const pugi::xml_node grid = doc.child("VTKFile").child("PUnstructuredGrid");
   if (!grid) throw InputError(path, "", "not a parallel VTU file (no <VTKFile><PUnstructuredGrid>)");
   const std::filesystem::path folder = std::filesystem::path(path).parent_path();
-  std::vector<RawMesh> pieces;
   std::vector<std::string> piece_paths;
   for (const pugi::xml_node piece : grid.children("Piece")) {
     const std::string source = piece.attribute("Source").value();
-    if (source.empty()) throw InputError(path, "Piece " + std::to_string(pieces.size()), "no Source");
+    if (source.empty()) throw InputError(path, "Piece " + std::to_string(piece_paths.size()), "no Source");
     const std::filesystem::path piece_path = std::filesystem::path(source).is_absolute() ? std::filesystem::path(source) : folder / source;
     if (piece_path.extension() != ".vtu")
-      throw InputError(path, "Piece " + std::to_string(pieces.size()), "Source '" + source.substr(0, 80) + "' is not a .vtu file");
+      throw InputError(path, "Piece " + std::to_string(piece_paths.size()), "Source '" + source.substr(0, 80) + "' is not a .vtu file");
     piece_paths.push_back(piece_path.string());
-    pieces.push_back(read_vtu_raw(piece_paths.back()));
   }
-  if (pieces.empty()) throw InputError(path, "Piece", "no pieces");
+  if (piece_paths.empty()) throw InputError(path, "Piece", "no pieces");
+  return piece_paths;
+}
+
+VtuPoints read_vtu_points(const std::string& path) {
+  const detail::MappedFile file(path);
+  return detail::VtuReader(file.view(), path).read_points();
+}
+
+namespace detail {
+
+LoadedMesh read_pvtu(const std::string& path) {
+  const std::vector<std::string> piece_paths = pvtu_piece_paths(path);
+  std::vector<RawMesh> pieces;
+  for (const std::string& piece_path : piece_paths) pieces.push_back(read_vtu_raw(piece_path));
   for (std::size_t k = 0; k < pieces.size(); ++k)
     if (pieces[k].node_global_id.empty() &&
         std::any_of(pieces.begin(), pieces.end(), [](const RawMesh& p) { return p.cohesive_corners != 0; }))
@@ -998,4 +1055,5 @@ LoadedMesh read_pvtu(const std::string& path) {
   return finish(merge_pieces(pieces, piece_paths), path);
 }
 
-}  // namespace cisamr::io::detail
+}  // namespace detail
+}  // namespace cisamr::io

@@ -6,6 +6,7 @@
 
 #include "geometry/periodic.hpp"
 #include "quality/certificate.hpp"
+#include "quality/pieces_internal.hpp"
 #include "quality/scene_queries.hpp"
 
 namespace cisamr::quality {
@@ -26,34 +27,51 @@ constexpr const char* kMeshedBoundary = Dim == 2 ? "polygonal" : "polyhedral";
 
 }  // namespace
 
+namespace detail {
+
 template <int Dim>
-Certificate certify(const mesh::SimplexMesh<Dim>& m, const geometry::Oracle<Dim>& oracle, const CertifyOptions& options) {
+SceneTerms<Dim> scene_terms(const geometry::Oracle<Dim>& oracle, const CertifyOptions& options) {
   const geometry::SceneDesc& scene = oracle.scene();
-  const Box<Dim> domain = detail::scene_domain<Dim>(scene);
-  CertifyOptions o = options;
+  SceneTerms<Dim> t;
+  t.domain = scene_domain<Dim>(scene);
+  CertifyOptions& o = t.options;
+  o = options;
   o.allow_inner_boundary =
       std::any_of(scene.phases.begin(), scene.phases.end(), [](const geometry::Phase& p) { return p.is_void; });
-  const std::vector<double> exact = oracle.phase_measures();
-  double expected = box_measure(domain);
-  for (std::size_t k = 0; k < scene.phases.size() && k < exact.size(); ++k)
-    if (scene.phases[k].is_void) expected -= exact[k];
+  t.exact_measures = oracle.phase_measures();
+  double expected = box_measure(t.domain);
+  for (std::size_t k = 0; k < scene.phases.size() && k < t.exact_measures.size(); ++k)
+    if (scene.phases[k].is_void) expected -= t.exact_measures[k];
   o.expected_measure = expected;
-  if (o.allow_inner_boundary) o.measure_tolerance = std::max(o.measure_tolerance, kVoidMeasureTolerance);
-
-  Certificate c = certify<Dim>(m, domain, o);
-  c.scene_source = scene.source;
-  c.domain_from_scene = true;
-  for (const geometry::Phase& p : scene.phases) c.phase_names.emplace_back(p.id, p.name);
   if (o.allow_inner_boundary) {
+    o.measure_tolerance = std::max(o.measure_tolerance, kVoidMeasureTolerance);
     char buf[200];
     std::snprintf(buf, sizeof buf,
                   "the scene has voids: total %s checked to %g only (void boundaries are %s); "
                   "open facets inside the domain are checked to lie on a void instead",
                   kMeasureName<Dim>, o.measure_tolerance, kMeshedBoundary<Dim>);
-    c.notes.push_back(buf);
+    t.void_note = buf;
   }
-  const double tol = options.fidelity_tolerance >= 0 ? options.fidelity_tolerance : default_fidelity_tolerance(scene);
-  c.fidelity = check_fidelity<Dim>(m, oracle, tol, exact);
+  t.fidelity_tolerance = options.fidelity_tolerance >= 0 ? options.fidelity_tolerance : default_fidelity_tolerance(scene);
+  return t;
+}
+
+template SceneTerms<2> scene_terms<2>(const geometry::Oracle<2>&, const CertifyOptions&);
+template SceneTerms<3> scene_terms<3>(const geometry::Oracle<3>&, const CertifyOptions&);
+
+}  // namespace detail
+
+template <int Dim>
+Certificate certify(const mesh::SimplexMesh<Dim>& m, const geometry::Oracle<Dim>& oracle, const CertifyOptions& options) {
+  const geometry::SceneDesc& scene = oracle.scene();
+  const detail::SceneTerms<Dim> terms = detail::scene_terms<Dim>(oracle, options);
+  const Box<Dim>& domain = terms.domain;
+  Certificate c = certify<Dim>(m, domain, terms.options);
+  c.scene_source = scene.source;
+  c.domain_from_scene = true;
+  for (const geometry::Phase& p : scene.phases) c.phase_names.emplace_back(p.id, p.name);
+  if (!terms.void_note.empty()) c.notes.push_back(terms.void_note);
+  c.fidelity = check_fidelity<Dim>(m, oracle, terms.fidelity_tolerance, terms.exact_measures);
   if (scene.any_periodic()) {
     // The faces where the mesher puts them: min, and min + N·h (the period) on a periodic axis.
     Box<Dim> faces = domain;

@@ -8,6 +8,7 @@
 #include "mesh/metrics.hpp"
 #include "quality/cell_geometry.hpp"
 #include "quality/facet_table.hpp"
+#include "quality/pieces_internal.hpp"
 #include "quality/quality.hpp"
 
 namespace cisamr::quality {
@@ -131,9 +132,10 @@ class NodeGrid {
   std::vector<std::int64_t> keys_;
 };
 
+// `border` (optional): pairs of two nodes marked there are left to check_border_conformity.
 template <int Dim>
 void find_duplicate_nodes(const mesh::SimplexMesh<Dim>& m, const Box<Dim>& domain, double eps,
-                          ConformityReport& r, Examples& ex) {
+                          ConformityReport& r, Examples& ex, const std::vector<bool>* border = nullptr) {
   const std::size_t n = m.node_count();
   if (n == 0) return;
   if (!(eps > 0)) eps = std::numeric_limits<double>::min();
@@ -143,7 +145,7 @@ void find_duplicate_nodes(const mesh::SimplexMesh<Dim>& m, const Box<Dim>& domai
     std::size_t twin = n;
     double gap = 0;
     grid.near(i, [&](std::size_t j) {
-      if (j >= i || twin < n) return;
+      if (j >= i || twin < n || (border && (*border)[i] && (*border)[j])) return;
       double dmax = 0;
       for (int d = 0; d < Dim; ++d) dmax = std::max(dmax, std::abs(pi[d] - m.coords[j * Dim + d]));
       if (dmax <= eps) {
@@ -295,42 +297,13 @@ void find_hanging_nodes(const mesh::SimplexMesh<Dim>& m, const std::vector<detai
   r.hanging_nodes = static_cast<std::size_t>(std::unique(hanging.begin(), hanging.end()) - hanging.begin());
 }
 
-}  // namespace
-
+// Cells: node references, orientation, measure; marks the nodes they use.
 template <int Dim>
-Box<Dim> bounding_box(const mesh::SimplexMesh<Dim>& m) {
-  Box<Dim> b;
-  if (m.node_count() == 0) return b;
-  b.min = b.max = m.point(0);
-  for (std::size_t i = 0; i < m.node_count(); ++i)
-    for (int d = 0; d < Dim; ++d) {
-      b.min[d] = std::min(b.min[d], m.coords[i * Dim + d]);
-      b.max[d] = std::max(b.max[d], m.coords[i * Dim + d]);
-    }
-  return b;
-}
-
-template <int Dim>
-double box_diagonal(const Box<Dim>& b) {
-  return mesh::distance<Dim>(b.min, b.max);
-}
-
-template <int Dim>
-ConformityReport check_conformity(const mesh::SimplexMesh<Dim>& m, const Box<Dim>& domain,
-                                  double expected_measure, bool allow_inner_boundary,
-                                  double measure_tolerance) {
-  ConformityReport r;
-  r.expected_measure = expected_measure;
-  r.measure_tolerance = measure_tolerance;
-  Examples ex(r.examples);
-  const double diagonal = box_diagonal(domain);
-  const std::size_t nodes = m.node_count(), cells = m.cell_count();
-
-  // Cells: node references, orientation, measure.
-  const std::vector<bool> valid = detail::valid_cells(m);
-  std::vector<bool> used(nodes, false);
+void check_cells(const mesh::SimplexMesh<Dim>& m, const std::vector<bool>& valid, ConformityReport& r, Examples& ex,
+                 std::vector<bool>& used) {
+  used.assign(m.node_count(), false);
   double measure = 0;
-  for (std::size_t c = 0; c < cells; ++c) {
+  for (std::size_t c = 0; c < m.cell_count(); ++c) {
     const LocalId* cn = m.cell(c);
     if (!valid[c]) {
       ++r.bad_node_references;
@@ -356,54 +329,63 @@ ConformityReport check_conformity(const mesh::SimplexMesh<Dim>& m, const Box<Dim
         ex.add("inverted cell " + std::to_string(c) + ": " + nodes_text(m, std::span<const LocalId>(cn, Dim + 1)));
     }
   }
-  r.measure = measure;
-  for (std::size_t n = 0; n < nodes; ++n)
-    if (!used[n]) {
+  r.measure += measure;
+}
+
+// Unused nodes (those `skip` marks are counted elsewhere).
+template <int Dim>
+void count_unused(const mesh::SimplexMesh<Dim>& m, const std::vector<bool>& used, const std::vector<bool>* skip,
+                  ConformityReport& r, Examples& ex) {
+  for (std::size_t n = 0; n < m.node_count(); ++n)
+    if (!used[n] && !(skip && (*skip)[n])) {
       ++r.unused_nodes;
       if (ex.wants("unused")) ex.add("unused node " + point_text(m, LocalId(n)));
     }
+}
 
-  find_duplicate_nodes(m, domain, kNearDuplicateTolerance * diagonal, r, ex);
-
-  // Facets.
-  const double box_tol = kOnBoxTolerance * diagonal;
-  std::vector<detail::FacetNodes<Dim>> open_inside;
-  detail::for_each_facet<Dim>(m, valid, [&](const detail::FacetNodes<Dim>& f, std::span<const detail::FacetUse> uses) {
-    if (uses.size() > 2) {
-      ++r.non_manifold_facets;
-      if (ex.wants("non-manifold"))
-        ex.add("facet " + nodes_text(m, f) + " shared by " + std::to_string(uses.size()) + " cells (first " +
-               std::to_string(uses[0].cell) + ", " + std::to_string(uses[1].cell) + ", " +
-               std::to_string(uses[2].cell) + ")");
-    } else if (uses.size() == 2) {
-      if (uses[0].odd == uses[1].odd) {
-        ++r.mismatched_orientation_facets;
-        if (ex.wants("orientation"))
-          ex.add("facet " + nodes_text(m, f) + " has the same orientation in cells " +
-                 std::to_string(uses[0].cell) + " and " + std::to_string(uses[1].cell));
-      }
-    } else if (detail::facet_on_box<Dim>(m, f, domain, box_tol)) {
-      ++r.boundary_facets;
-    } else {
-      open_inside.push_back(f);
-      if (allow_inner_boundary) {
-        ++r.inner_boundary_facets;
-      } else {
-        ++r.open_facets_inside;
-        if (ex.wants("open"))
-          ex.add("open facet inside the domain " + nodes_text(m, f) + " of cell " + std::to_string(uses[0].cell));
-      }
+// A facet shared by `uses` cells: counted, and kept in `open_inside` when open off the box.
+template <int Dim>
+void classify_facet(const mesh::SimplexMesh<Dim>& m, const detail::FacetNodes<Dim>& f,
+                    std::span<const detail::FacetUse> uses, const Box<Dim>& domain, double box_tol,
+                    bool allow_inner_boundary, ConformityReport& r, Examples& ex,
+                    std::vector<detail::FacetNodes<Dim>>& open_inside) {
+  if (uses.size() > 2) {
+    ++r.non_manifold_facets;
+    if (ex.wants("non-manifold"))
+      ex.add("facet " + nodes_text(m, f) + " shared by " + std::to_string(uses.size()) + " cells (first " +
+             std::to_string(uses[0].cell) + ", " + std::to_string(uses[1].cell) + ", " +
+             std::to_string(uses[2].cell) + ")");
+  } else if (uses.size() == 2) {
+    if (uses[0].odd == uses[1].odd) {
+      ++r.mismatched_orientation_facets;
+      if (ex.wants("orientation"))
+        ex.add("facet " + nodes_text(m, f) + " has the same orientation in cells " + std::to_string(uses[0].cell) +
+               " and " + std::to_string(uses[1].cell));
     }
-  });
-  find_hanging_nodes<Dim>(m, open_inside, r, ex);
+  } else if (detail::facet_on_box<Dim>(m, f, domain, box_tol)) {
+    ++r.boundary_facets;
+  } else {
+    open_inside.push_back(f);
+    if (allow_inner_boundary) {
+      ++r.inner_boundary_facets;
+    } else {
+      ++r.open_facets_inside;
+      if (ex.wants("open"))
+        ex.add("open facet inside the domain " + nodes_text(m, f) + " of cell " + std::to_string(uses[0].cell));
+    }
+  }
+}
 
+void finish_conformity(ConformityReport& r, double expected_measure, double measure_tolerance, Examples& ex) {
+  r.expected_measure = expected_measure;
+  r.measure_tolerance = measure_tolerance;
   if (expected_measure >= 0) {
-    const double diff = std::abs(measure - expected_measure);
+    const double diff = std::abs(r.measure - expected_measure);
     r.measure_error = expected_measure > 0 ? diff / expected_measure : diff;
     if (!(r.measure_error <= measure_tolerance) && ex.wants("measure")) {
       char buf[160];
       std::snprintf(buf, sizeof buf, "total measure %.12g differs from the expected %.12g (relative %.3g)",
-                    measure, expected_measure, r.measure_error);
+                    r.measure, expected_measure, r.measure_error);
       ex.add(buf);
     }
   }
@@ -411,8 +393,159 @@ ConformityReport check_conformity(const mesh::SimplexMesh<Dim>& m, const Box<Dim
          r.bad_node_references == 0 && r.non_manifold_facets == 0 &&
          r.mismatched_orientation_facets == 0 && r.open_facets_inside == 0 && r.hanging_nodes == 0 &&
          r.unused_nodes == 0 && (expected_measure < 0 || r.measure_error <= measure_tolerance);
+}
+
+}  // namespace
+
+template <int Dim>
+Box<Dim> bounding_box(const mesh::SimplexMesh<Dim>& m) {
+  Box<Dim> b;
+  if (m.node_count() == 0) return b;
+  b.min = b.max = m.point(0);
+  for (std::size_t i = 0; i < m.node_count(); ++i)
+    for (int d = 0; d < Dim; ++d) {
+      b.min[d] = std::min(b.min[d], m.coords[i * Dim + d]);
+      b.max[d] = std::max(b.max[d], m.coords[i * Dim + d]);
+    }
+  return b;
+}
+
+template <int Dim>
+double box_diagonal(const Box<Dim>& b) {
+  return mesh::distance<Dim>(b.min, b.max);
+}
+
+template <int Dim>
+ConformityReport check_conformity(const mesh::SimplexMesh<Dim>& m, const Box<Dim>& domain,
+                                  double expected_measure, bool allow_inner_boundary,
+                                  double measure_tolerance) {
+  ConformityReport r;
+  Examples ex(r.examples);
+  const double diagonal = box_diagonal(domain);
+  const std::vector<bool> valid = detail::valid_cells(m);
+  std::vector<bool> used;
+  check_cells(m, valid, r, ex, used);
+  count_unused(m, used, nullptr, r, ex);
+  find_duplicate_nodes(m, domain, kNearDuplicateTolerance * diagonal, r, ex);
+  const double box_tol = kOnBoxTolerance * diagonal;
+  std::vector<detail::FacetNodes<Dim>> open_inside;
+  detail::for_each_facet<Dim>(m, valid, [&](const detail::FacetNodes<Dim>& f, std::span<const detail::FacetUse> uses) {
+    classify_facet<Dim>(m, f, uses, domain, box_tol, allow_inner_boundary, r, ex, open_inside);
+  });
+  find_hanging_nodes<Dim>(m, open_inside, r, ex);
+  finish_conformity(r, expected_measure, measure_tolerance, ex);
   return r;
 }
+
+namespace detail {
+
+// A facet (nodes ascending by local id, `odd` the parity of its cell's listing) by the
+// nodes' global ids, ascending, with the parity relative to that order.
+template <int Dim>
+GlobalFacet<Dim> global_facet(const mesh::SimplexMesh<Dim>& m, const FacetNodes<Dim>& f, bool odd) {
+  GlobalFacet<Dim> g;
+  for (int k = 0; k < Dim; ++k) g.ids[k] = m.node_global_id[std::size_t(f[k])];
+  for (int i = 0; i < Dim; ++i)
+    for (int j = i; j > 0 && g.ids[j - 1] > g.ids[j]; --j) {
+      std::swap(g.ids[j - 1], g.ids[j]);
+      odd = !odd;
+    }
+  g.odd = odd;
+  return g;
+}
+
+template <int Dim>
+void check_piece_conformity(const mesh::SimplexMesh<Dim>& m, const std::vector<bool>& shared, const Box<Dim>& domain,
+                            bool allow_inner_boundary, std::size_t cell_offset, ConformityReport& r,
+                            PieceBorder<Dim>& border) {
+  Examples ex(r.examples);
+  const double diagonal = box_diagonal(domain);
+  const std::vector<bool> valid = detail::valid_cells(m);
+  check_cells(m, valid, r, ex, border.used);
+  count_unused(m, border.used, &shared, r, ex);
+  // Facets: those of shared nodes only may meet other pieces' (they are judged with all their
+  // uses); the piece's own open facets off the box go to the border (hanging nodes).
+  const double box_tol = kOnBoxTolerance * diagonal;
+  std::vector<FacetNodes<Dim>> open_inside;
+  for_each_facet<Dim>(m, valid, [&](const FacetNodes<Dim>& f, std::span<const FacetUse> uses) {
+    if (std::all_of(f.begin(), f.end(), [&](LocalId n) { return shared[std::size_t(n)]; })) {
+      for (const FacetUse& u : uses) {
+        GlobalFacet<Dim> g = global_facet<Dim>(m, f, u.odd);
+        g.cell = cell_offset + u.cell;
+        border.shared_facets.push_back(g);
+      }
+      return;
+    }
+    // Not all shared: no other piece has it, so it is judged here; an open one off the box
+    // goes to the border too (hanging nodes, void nodes).
+    const std::size_t before = open_inside.size();
+    classify_facet<Dim>(m, f, uses, domain, box_tol, allow_inner_boundary, r, ex, open_inside);
+    if (open_inside.size() > before) {
+      std::array<GlobalId, Dim> ids;
+      for (int k = 0; k < Dim; ++k) ids[k] = m.node_global_id[std::size_t(f[k])];
+      border.open_facets.push_back(ids);
+    }
+  });
+  std::vector<bool> on_border = shared;
+  border.open_nodes.clear();
+  for (const FacetNodes<Dim>& f : open_inside)
+    for (LocalId n : f)
+      if (!on_border[std::size_t(n)]) {
+        on_border[std::size_t(n)] = true;
+        border.open_nodes.push_back(n);
+      }
+  std::sort(border.open_nodes.begin(), border.open_nodes.end());
+  find_duplicate_nodes(m, domain, kNearDuplicateTolerance * diagonal, r, ex, &on_border);
+}
+
+template <int Dim>
+std::vector<LocalId> check_border_conformity(const mesh::SimplexMesh<Dim>& border,
+                                             std::vector<BorderFacetUse<Dim>>& shared_uses,
+                                             const std::vector<FacetNodes<Dim>>& open_facets, const Box<Dim>& domain,
+                                             bool allow_inner_boundary, ConformityReport& r) {
+  Examples ex(r.examples);
+  const double diagonal = box_diagonal(domain);
+  const double box_tol = kOnBoxTolerance * diagonal;
+  std::vector<FacetNodes<Dim>> open_inside;
+  std::sort(shared_uses.begin(), shared_uses.end(), [](const BorderFacetUse<Dim>& a, const BorderFacetUse<Dim>& b) {
+    return a.nodes != b.nodes ? a.nodes < b.nodes : a.use.cell < b.use.cell;
+  });
+  std::vector<FacetUse> uses;
+  for (std::size_t i = 0; i < shared_uses.size();) {
+    std::size_t j = i;
+    uses.clear();
+    while (j < shared_uses.size() && shared_uses[j].nodes == shared_uses[i].nodes) uses.push_back(shared_uses[j++].use);
+    classify_facet<Dim>(border, shared_uses[i].nodes, std::span<const FacetUse>(uses), domain, box_tol,
+                   allow_inner_boundary, r, ex, open_inside);
+    i = j;
+  }
+  open_inside.insert(open_inside.end(), open_facets.begin(), open_facets.end());  // counted by their pieces
+  find_duplicate_nodes(border, domain, kNearDuplicateTolerance * diagonal, r, ex);
+  find_hanging_nodes<Dim>(border, open_inside, r, ex);
+  std::vector<LocalId> nodes;
+  for (const FacetNodes<Dim>& f : open_inside) nodes.insert(nodes.end(), f.begin(), f.end());
+  std::sort(nodes.begin(), nodes.end());
+  nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
+  return nodes;
+}
+
+void finish_piecewise_conformity(ConformityReport& r, double expected_measure, double measure_tolerance) {
+  Examples ex(r.examples);
+  finish_conformity(r, expected_measure, measure_tolerance, ex);
+}
+
+#define CISAMR_CONFORMITY_PARTS(D)                                                                              \
+  template void check_piece_conformity<D>(const mesh::SimplexMesh<D>&, const std::vector<bool>&, const Box<D>&, \
+                                          bool, std::size_t, ConformityReport&, PieceBorder<D>&);             \
+  template std::vector<LocalId> check_border_conformity<D>(const mesh::SimplexMesh<D>&,                        \
+                                                           std::vector<BorderFacetUse<D>>&,                     \
+                                                           const std::vector<FacetNodes<D>>&, const Box<D>&,    \
+                                                           bool, ConformityReport&);
+CISAMR_CONFORMITY_PARTS(2)
+CISAMR_CONFORMITY_PARTS(3)
+#undef CISAMR_CONFORMITY_PARTS
+
+}  // namespace detail
 
 template Box<2> bounding_box<2>(const mesh::SimplexMesh<2>&);
 template Box<3> bounding_box<3>(const mesh::SimplexMesh<3>&);

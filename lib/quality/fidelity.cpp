@@ -12,6 +12,7 @@
 #include "quality/cell_geometry.hpp"
 #include "quality/facet_table.hpp"
 #include "quality/quality.hpp"
+#include "quality/pieces_internal.hpp"
 #include "quality/scene_queries.hpp"
 
 namespace cisamr::quality {
@@ -33,18 +34,8 @@ template <int Dim>
 constexpr bool kCentroidCheck = Dim == 3;
 
 template <int Dim>
-std::string point_text(const Vec<Dim>& p) {
-  char buf[96];
-  if constexpr (Dim == 2)
-    std::snprintf(buf, sizeof buf, "(%.12g, %.12g)", p[0], p[1]);
-  else
-    std::snprintf(buf, sizeof buf, "(%.12g, %.12g, %.12g)", p[0], p[1], p[2]);
-  return buf;
-}
-
-template <int Dim>
 std::string node_text(std::size_t n, const Vec<Dim>& p) {
-  return std::to_string(n) + " " + point_text<Dim>(p);
+  return std::to_string(n) + " " + detail::point_text<Dim>(p);
 }
 
 // The 3^Dim − 1 directions to the neighbours of a cell in a 3×…×3 block, unit length, the
@@ -107,20 +98,66 @@ class Probe {
   std::vector<std::int32_t> candidates_;
 };
 
+template <int Dim>
+void add_example(FidelityReport& r, std::string s) {
+  if (r.examples.size() < kMaxExamples) r.examples.push_back(std::move(s));
+}
+
+// The checks of one node against the phases `mask` of its cells.
+template <int Dim>
+detail::NodeVerdict node_verdict(Probe<Dim>& probe, const geometry::SceneDesc& scene, const Vec<Dim>& p,
+                                 PhaseMask mask, double tol, double strict_tol) {
+  detail::NodeVerdict v;
+  v.mask = mask;
+  v.closure = probe.closure(p);
+  if ((mask & ~v.closure) == 0) return v;
+  const bool strict = strict_tol >= 0 && strict_tol < tol;
+  const int phases = static_cast<int>(scene.phases.size());
+  for (int k = 0; k < phases && k < 64; ++k) {
+    if (!(mask >> k & 1) || (v.closure >> k & 1)) continue;
+    double d = probe.distance(p, k, strict ? strict_tol : tol);
+    if (strict && !(d <= strict_tol)) {
+      v.beyond_strict = true;
+      if (!(d <= tol)) d = probe.distance(p, k, tol);  // the strict probes may not settle tol
+    }
+    if (!(d <= v.worst)) v.worst = d, v.worst_phase = k;  // NaN counts as off
+  }
+  return v;
+}
+
 }  // namespace
 
-double default_fidelity_tolerance(const geometry::SceneDesc& scene) {
-  double s = 0;
-  for (int d = 0; d < scene.dimension; ++d) {
-    const double e = scene.domain_max[d] - scene.domain_min[d];
-    s += e * e;
+namespace detail {
+
+template <int Dim>
+std::string point_text(const Vec<Dim>& p) {
+  char buf[96];
+  if constexpr (Dim == 2)
+    std::snprintf(buf, sizeof buf, "(%.12g, %.12g)", p[0], p[1]);
+  else
+    std::snprintf(buf, sizeof buf, "(%.12g, %.12g, %.12g)", p[0], p[1], p[2]);
+  return buf;
+}
+
+// Counts a node's verdict; `name` is how the examples name it ("17 (x, y)").
+template <int Dim>
+void count_node(FidelityReport& r, const geometry::SceneDesc& scene, const NodeVerdict& v, double tol,
+                const std::string& name) {
+  r.nodes_beyond_strict += v.beyond_strict ? 1 : 0;
+  if (std::isfinite(v.worst)) r.max_deviation = std::max(r.max_deviation, v.worst);
+  if (v.worst <= tol) return;
+  char buf[96];
+  std::snprintf(buf, sizeof buf, " is %.3g from phase %d", v.worst,
+                v.worst_phase >= 0 ? scene.phases[std::size_t(v.worst_phase)].id : -1);
+  if ((v.mask & (v.mask - 1)) != 0) {
+    if (++r.interface_nodes_off_interface <= 3) add_example<Dim>(r, "interface node " + name + buf);
+  } else {
+    if (++r.nodes_off_phase <= 3) add_example<Dim>(r, "node " + name + buf);
   }
-  return 1e-9 * std::sqrt(s);
 }
 
 template <int Dim>
-FidelityReport check_fidelity(const mesh::SimplexMesh<Dim>& m, const geometry::Oracle<Dim>& oracle, double tol,
-                              std::span<const double> exact_measures, double strict_tol) {
+FidelityReport start_fidelity(const geometry::Oracle<Dim>& oracle, double tol, std::span<const double> exact_measures) {
   const geometry::SceneDesc& scene = oracle.scene();
   FidelityReport r;
   r.tolerance = tol;
@@ -138,9 +175,14 @@ FidelityReport check_fidelity(const mesh::SimplexMesh<Dim>& m, const geometry::O
     r.exact_phase_measure.assign(exact_measures.begin(), exact_measures.end());
   r.exact_phase_measure.resize(phases, 0.0);
   r.relative_error.assign(phases, std::numeric_limits<double>::quiet_NaN());
-  auto example = [&](std::string s) {
-    if (r.examples.size() < kMaxExamples) r.examples.push_back(std::move(s));
-  };
+  return r;
+}
+
+template <int Dim>
+void check_mesh_fidelity(const mesh::SimplexMesh<Dim>& m, const geometry::Oracle<Dim>& oracle, double tol,
+                         double strict_tol, const std::vector<bool>* shared,
+                         std::vector<std::pair<LocalId, NodeVerdict>>* shared_verdicts, FidelityReport& r) {
+  const geometry::SceneDesc& scene = oracle.scene();
   Probe<Dim> probe(oracle);
 
   // Phases around every node (bit = phase index), per-phase measure.
@@ -153,10 +195,9 @@ FidelityReport check_fidelity(const mesh::SimplexMesh<Dim>& m, const geometry::O
     const int id = c < m.cell_phase.size() ? m.cell_phase[c] : 0;
     const int k = scene.phase_index(id);
     if (k < 0 || k >= 64 || scene.phases[std::size_t(k)].is_void) {
-      ++r.cells_unknown_phase;
-      if (r.cells_unknown_phase <= 3)
-        example("cell " + std::to_string(c) + " has phase id " + std::to_string(id) +
-                (k < 0 ? ", which the scene does not define" : ", a void phase (voids are not meshed)"));
+      if (++r.cells_unknown_phase <= 3)
+        add_example<Dim>(r, "cell " + std::to_string(c) + " has phase id " + std::to_string(id) +
+                                (k < 0 ? ", which the scene does not define" : ", a void phase (voids are not meshed)"));
       continue;
     }
     cell_phase_index[c] = k;
@@ -164,59 +205,28 @@ FidelityReport check_fidelity(const mesh::SimplexMesh<Dim>& m, const geometry::O
     r.phase_measure[std::size_t(k)] += std::abs(detail::signed_measure(m, cn));
     for (int v = 0; v <= Dim; ++v) around[std::size_t(cn[v])] |= PhaseMask(1) << k;
   }
-  for (int k = 0; k < phases; ++k) {
-    if (scene.phases[std::size_t(k)].is_void) continue;
-    const double exact = r.exact_phase_measure[std::size_t(k)], got = r.phase_measure[std::size_t(k)];
-    r.relative_error[std::size_t(k)] = exact > 0 ? std::abs(got - exact) / exact : (got > 0 ? kInf : 0.0);
-  }
 
   // Every node must lie in the closure of each phase it serves. The exact classification
   // settles almost every node; distances (costly for NURBS, clusters and STL surfaces) only
   // for the phases its closure lacks. A node counts as "on the interface" for the centroid
   // check when its closure holds a phase other than a cell's (or it serves several phases,
-  // or lies off one within tol).
+  // or lies off one within tol). A node other pieces share is judged once its phases in
+  // every piece are known (shared_verdicts).
   std::vector<PhaseMask> node_closure(nodes, 0);
-  std::size_t shown_off_phase = 0, shown_off_interface = 0;
-  const bool strict = strict_tol >= 0 && strict_tol < tol;
   for (std::size_t n = 0; n < nodes; ++n) {
-    const PhaseMask mask = around[n];
-    if (mask == 0) continue;
-    const bool interface = (mask & (mask - 1)) != 0;
+    if (around[n] == 0) continue;
     const Vec<Dim> p = m.point(LocalId(n));
-    const PhaseMask closure = probe.closure(p);
-    node_closure[n] = closure;
-    if ((mask & ~closure) == 0) continue;
-    double worst = 0;
-    int worst_phase = -1;
-    bool beyond_strict = false;
-    for (int k = 0; k < phases && k < 64; ++k) {
-      if (!(mask >> k & 1) || (closure >> k & 1)) continue;
-      double d = probe.distance(p, k, strict ? strict_tol : tol);
-      if (strict && !(d <= strict_tol)) {
-        beyond_strict = true;
-        if (!(d <= tol)) d = probe.distance(p, k, tol);  // the strict probes may not settle tol
-      }
-      if (!(d <= worst)) worst = d, worst_phase = k;  // NaN counts as off
-    }
-    r.nodes_beyond_strict += beyond_strict ? 1 : 0;
-    if (std::isfinite(worst)) r.max_deviation = std::max(r.max_deviation, worst);
-    if (worst <= tol) continue;
-    char buf[96];
-    std::snprintf(buf, sizeof buf, " is %.3g from phase %d", worst,
-                  worst_phase >= 0 ? scene.phases[std::size_t(worst_phase)].id : -1);
-    if (interface) {
-      ++r.interface_nodes_off_interface;
-      if (shown_off_interface++ < 3) example("interface node " + node_text<Dim>(n, p) + buf);
-    } else {
-      ++r.nodes_off_phase;
-      if (shown_off_phase++ < 3) example("node " + node_text<Dim>(n, p) + buf);
-    }
+    const NodeVerdict v = node_verdict<Dim>(probe, scene, p, around[n], tol, strict_tol);
+    node_closure[n] = v.closure;
+    if (shared && (*shared)[n])
+      shared_verdicts->emplace_back(LocalId(n), v);
+    else
+      count_node<Dim>(r, scene, v, tol, node_text<Dim>(n, p));
   }
 
   // Centroids: in the cell's phase, or within the slack of README.md (counted beyond it,
   // failed beyond kWrongPhaseRatio).
   if constexpr (kCentroidCheck<Dim>) {
-    std::size_t shown_cells = 0;
     for (std::size_t c = 0; c < m.cell_count(); ++c) {
       const int k = cell_phase_index[c];
       if (k < 0) continue;
@@ -231,24 +241,25 @@ FidelityReport check_fidelity(const mesh::SimplexMesh<Dim>& m, const geometry::O
       const double d = probe.distance(g, k, allowed);
       if (l > 0 && std::isfinite(d)) r.max_centroid_ratio = std::max(r.max_centroid_ratio, d / l);
       if (d <= allowed) continue;
-      ++r.cells_off_phase;
       const bool wrong = !(d <= std::max(tol, kWrongPhaseRatio * l));
       r.cells_wrong_phase += wrong ? 1 : 0;
-      if (shown_cells++ < 3) {
+      if (++r.cells_off_phase <= 3) {
         char buf[160];
         std::snprintf(buf, sizeof buf, " is %.3g (%.3g of its longest edge) from phase %d%s%s", d,
                       l > 0 ? d / l : kInf, scene.phases[std::size_t(k)].id,
                       all_on_interface ? " (all its vertices on an interface)" : "", wrong ? ": in another phase" : "");
-        example("centroid " + point_text<Dim>(g) + " of cell " + std::to_string(c) + buf);
+        add_example<Dim>(r, "centroid " + point_text<Dim>(g) + " of cell " + std::to_string(c) + buf);
       }
     }
   }
+}
 
-  // Open facets inside the domain are void interfaces: their nodes must lie on a void.
-  const Box<Dim> domain = detail::scene_domain<Dim>(scene);
-  const std::vector<LocalId> boundary_nodes =
-      detail::open_facet_nodes_inside_box<Dim>(m, domain, kOnBoxTolerance * box_diagonal(domain));
-  std::size_t shown_off_void = 0;
+template <int Dim>
+void check_void_boundary_nodes(const mesh::SimplexMesh<Dim>& m, std::span<const LocalId> boundary_nodes,
+                               const geometry::Oracle<Dim>& oracle, double tol, FidelityReport& r) {
+  const geometry::SceneDesc& scene = oracle.scene();
+  const int phases = static_cast<int>(scene.phases.size());
+  Probe<Dim> probe(oracle);
   PhaseMask void_mask = 0;
   for (int k = 0; k < phases && k < 64; ++k)
     if (scene.phases[std::size_t(k)].is_void) void_mask |= PhaseMask(1) << k;
@@ -260,19 +271,66 @@ FidelityReport check_fidelity(const mesh::SimplexMesh<Dim>& m, const geometry::O
       if (scene.phases[std::size_t(k)].is_void) nearest = std::min(nearest, probe.distance(p, k, tol));
     if (std::isfinite(nearest)) r.max_deviation = std::max(r.max_deviation, nearest);
     if (nearest <= tol) continue;
-    ++r.boundary_nodes_off_void;
-    if (shown_off_void++ < 3) {
+    if (++r.boundary_nodes_off_void <= 3) {
       char buf[96];
       if (std::isfinite(nearest))
         std::snprintf(buf, sizeof buf, " is %.3g from the nearest void", nearest);
       else
         std::snprintf(buf, sizeof buf, " (the scene has no void)");
-      example("node " + node_text<Dim>(std::size_t(n), p) + " of an open facet inside the domain" + buf);
+      const std::size_t id = m.node_global_id.empty() ? std::size_t(n) : std::size_t(m.node_global_id[std::size_t(n)]);
+      add_example<Dim>(r, "node " + node_text<Dim>(id, p) + " of an open facet inside the domain" + buf);
     }
   }
+}
 
+template <int Dim>
+void finish_fidelity(const geometry::SceneDesc& scene, FidelityReport& r) {
+  for (std::size_t k = 0; k < scene.phases.size(); ++k) {
+    if (scene.phases[k].is_void) continue;
+    const double exact = r.exact_phase_measure[k], got = r.phase_measure[k];
+    r.relative_error[k] = exact > 0 ? std::abs(got - exact) / exact : (got > 0 ? kInf : 0.0);
+  }
   r.ok = r.nodes_off_phase == 0 && r.interface_nodes_off_interface == 0 && r.boundary_nodes_off_void == 0 &&
          r.cells_unknown_phase == 0 && r.cells_wrong_phase == 0;
+}
+
+#define CISAMR_FIDELITY_PARTS(D)                                                                                     \
+  template std::string point_text<D>(const Vec<D>&);                                                                 \
+  template void count_node<D>(FidelityReport&, const geometry::SceneDesc&, const NodeVerdict&, double,               \
+                              const std::string&);                                                                   \
+  template FidelityReport start_fidelity<D>(const geometry::Oracle<D>&, double, std::span<const double>);            \
+  template void check_mesh_fidelity<D>(const mesh::SimplexMesh<D>&, const geometry::Oracle<D>&, double, double,     \
+                                       const std::vector<bool>*, std::vector<std::pair<LocalId, NodeVerdict>>*,      \
+                                       FidelityReport&);                                                             \
+  template void check_void_boundary_nodes<D>(const mesh::SimplexMesh<D>&, std::span<const LocalId>,                  \
+                                             const geometry::Oracle<D>&, double, FidelityReport&);                   \
+  template void finish_fidelity<D>(const geometry::SceneDesc&, FidelityReport&);
+CISAMR_FIDELITY_PARTS(2)
+CISAMR_FIDELITY_PARTS(3)
+#undef CISAMR_FIDELITY_PARTS
+
+}  // namespace detail
+
+double default_fidelity_tolerance(const geometry::SceneDesc& scene) {
+  double s = 0;
+  for (int d = 0; d < scene.dimension; ++d) {
+    const double e = scene.domain_max[d] - scene.domain_min[d];
+    s += e * e;
+  }
+  return 1e-9 * std::sqrt(s);
+}
+
+template <int Dim>
+FidelityReport check_fidelity(const mesh::SimplexMesh<Dim>& m, const geometry::Oracle<Dim>& oracle, double tol,
+                              std::span<const double> exact_measures, double strict_tol) {
+  FidelityReport r = detail::start_fidelity<Dim>(oracle, tol, exact_measures);
+  detail::check_mesh_fidelity<Dim>(m, oracle, tol, strict_tol, nullptr, nullptr, r);
+  // Open facets inside the domain are void interfaces: their nodes must lie on a void.
+  const Box<Dim> domain = detail::scene_domain<Dim>(oracle.scene());
+  const std::vector<LocalId> boundary_nodes =
+      detail::open_facet_nodes_inside_box<Dim>(m, domain, kOnBoxTolerance * box_diagonal(domain));
+  detail::check_void_boundary_nodes<Dim>(m, boundary_nodes, oracle, tol, r);
+  detail::finish_fidelity<Dim>(oracle.scene(), r);
   return r;
 }
 

@@ -15,6 +15,26 @@ fail() { echo "FAIL: $*"; exit 1; }
 run_mpi() { local n=$1; shift; timeout 60 "$mpiexec" -n "$n" --oversubscribe --allow-run-as-root "$@"; }
 checksum() { sed -n 's/.*"checksum": "\([0-9a-f]*\)".*/\1/p' "$1"; }
 
+# Two certificates (JSON) with the same verdicts and counts: the notes, the examples (which
+# name pieces or not) and the sums' last digits (order of summation) aside.
+same_certificate() {
+  python3 - "$1" "$2" <<'EOF'
+import json, sys
+a, b = (json.load(open(p)) for p in sys.argv[1:3])
+def strip(x, key=""):
+    if isinstance(x, dict):
+        return {k: strip(v, k) for k, v in x.items() if k not in ("notes", "examples", "mesh")}
+    if isinstance(x, list):
+        return [strip(v) for v in x]
+    if isinstance(x, float):
+        return round(x, 9 if key in ("measure", "mean", "measure_error", "relative_error") else 15)
+    return x
+if strip(a) != strip(b):
+    print(json.dumps(strip(a))[:2000]); print(json.dumps(strip(b))[:2000])
+    sys.exit(1)
+EOF
+}
+
 # The same mesh through VTK's own .pvtu reader: points by global id, cells as sorted
 # global-id tuples with their phase.
 same_mesh() {  # same_mesh A.pvtu B.pvtu
@@ -72,10 +92,23 @@ for scene in "$examples/composite.json" "$examples/spheres3d.json"; do
   # certificate as the sequential mesh's, line for line (the examples' collapsed nodes
   # included; the measure's last digits depend on the order of summation).
   "$cisamr" certify "$dir/$name-s.pvtu" -q || fail "$name: the streamed mesh does not certify"
-  certificate() { "$cisamr" certify "$1" --scene "$scene" 2>&1 | tail -n +2 | sed -E 's/ \(relative error [^)]*\)//'; }
+  certificate() {
+    "$cisamr" certify "$@" --scene "$scene" 2>&1 | tail -n +2 | sed -E 's/ \(relative error [^)]*\)//' |
+      grep -v "^note: read piece by piece"
+  }
   certificate "$dir/$name-s.pvtu" > "$dir/cert-s.txt"
   certificate "$dir/$name-seq.vtu" > "$dir/cert-seq.txt"
   diff "$dir/cert-s.txt" "$dir/cert-seq.txt" || fail "$name: the certificates differ"
+  # Piece by piece (the default for a .pvtu) and merged (--whole): the same certificate, count
+  # for count, with and without the scene.
+  for with_scene in "--scene $scene" ""; do
+    # shellcheck disable=SC2086
+    "$cisamr" certify "$dir/$name-s.pvtu" $with_scene --json "$dir/pieces.json" -q
+    grep -q '"read piece by piece' "$dir/pieces.json" || fail "$name: the .pvtu was not read piece by piece"
+    # shellcheck disable=SC2086
+    "$cisamr" certify "$dir/$name-s.pvtu" $with_scene --whole --json "$dir/whole.json" -q
+    same_certificate "$dir/pieces.json" "$dir/whole.json" || fail "$name: piece by piece and --whole differ ($with_scene)"
+  done
 
   if [ -n "$mpiexec" ]; then
     run_mpi 3 "$cisamr" mesh "$scene" -o "$dir/$name-3.pvtu" --stream --partitions 7 --report "$dir/$name-3.json" -q ||
@@ -88,6 +121,36 @@ for scene in "$examples/composite.json" "$examples/spheres3d.json"; do
     [ "$(ls "$dir" | grep -c "^$name-2_[0-9]*\.vtu$")" = 16 ] || fail "$name: default is not 8 partitions per rank"
   fi
 done
+
+# A piece that puts a node (by global id) elsewhere than another piece does: certify stops
+# with exit 2 and one line naming that piece and global_id (nothing to certify: the pieces
+# do not describe one mesh).
+mkdir "$dir/moved" && cp "$dir"/composite-s.pvtu "$dir"/composite-s_*.vtu "$dir/moved/"
+/usr/bin/python3 - "$dir/moved/composite-s_0.vtu" "$dir/moved/composite-s_1.vtu" <<'EOF' || fail "could not build the bad piece"
+import sys
+import vtk
+from vtk.util.numpy_support import vtk_to_numpy
+def read(path):
+    r = vtk.vtkXMLUnstructuredGridReader()
+    r.SetFileName(path)
+    r.Update()
+    return r.GetOutput()
+first, second = read(sys.argv[1]), read(sys.argv[2])
+ids0 = set(vtk_to_numpy(first.GetPointData().GetArray("global_id")).tolist())
+ids1 = vtk_to_numpy(second.GetPointData().GetArray("global_id"))
+shared = [i for i, g in enumerate(ids1.tolist()) if g in ids0]
+assert shared, "pieces 0 and 1 share no node"
+p = list(second.GetPoint(shared[0]))
+second.GetPoints().SetPoint(shared[0], p[0] + 1e-3, p[1], p[2])
+w = vtk.vtkXMLUnstructuredGridWriter()
+w.SetFileName(sys.argv[2])
+w.SetInputData(second)
+w.Write()
+EOF
+"$cisamr" certify "$dir/moved/composite-s.pvtu" > /dev/null 2> "$dir/moved.err"
+[ $? = 2 ] || fail "a piece moving a shared node: not exit 2"
+[ "$(wc -l < "$dir/moved.err")" = 1 ] && grep -q "composite-s_1.vtu.*global_id" "$dir/moved.err" ||
+  fail "a piece moving a shared node: $(cat "$dir/moved.err")"
 
 # Chosen automatically: pieces asked for, an estimate beyond what memory holds (here
 # --max-elements) streams instead of refusing, with a note; the same mesh.

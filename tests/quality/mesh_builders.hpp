@@ -92,4 +92,26 @@ inline mesh::Mesh3 structured_tets(int nx, int ny, int nz) {
   return m;
 }
 
+
+// Keeps the cells `keep` says yes to, drops the nodes no kept cell uses; nodes keep their global ids.
+template <int Dim, class Keep>
+mesh::SimplexMesh<Dim> filtered(const mesh::SimplexMesh<Dim>& m, Keep keep) {
+  mesh::SimplexMesh<Dim> out;
+  std::vector<LocalId> new_id(m.node_count(), -1);
+  for (std::size_t c = 0; c < m.cell_count(); ++c) {
+    if (!keep(c)) continue;
+    std::array<LocalId, Dim + 1> t;
+    for (int k = 0; k <= Dim; ++k) {
+      LocalId& n = new_id[m.cell(c)[k]];
+      if (n < 0) {
+        n = add_node(out, m.point(m.cell(c)[k]));
+        out.node_global_id.back() = m.node_global_id[std::size_t(m.cell(c)[k])];
+      }
+      t[k] = n;
+    }
+    add_cell<Dim>(out, t, m.cell_phase[c]);
+  }
+  return out;
+}
+
 }  // namespace cisamr::quality::testing

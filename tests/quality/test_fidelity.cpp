@@ -8,6 +8,7 @@
 #include "geometry/oracle.hpp"
 #include "geometry/scene.hpp"
 #include "mesh_builders.hpp"
+#include "scene_builders.hpp"
 #include "quality/certificate.hpp"
 #include "quality/quality.hpp"
 
@@ -15,63 +16,6 @@ namespace cisamr::quality {
 namespace {
 using namespace testing;
 
-// [0, size]^dimension with one inclusion of phase 2, named `name` or, when asked, a void.
-geometry::SceneDesc one_inclusion_scene(int dimension, double size, geometry::Shape shape, const std::string& name,
-                                        bool inclusion_is_void) {
-  geometry::SceneDesc s;
-  s.source = name + "-scene.json";
-  s.dimension = dimension;
-  s.domain_min = {0, 0, 0};
-  s.domain_max = {size, size, dimension == 3 ? size : 0};
-  s.h = dimension == 3 ? 1 : 0.25;
-  s.phases = {{1, "matrix", false}, {2, inclusion_is_void ? "pore" : name, inclusion_is_void}};
-  s.matrix_phase = 1;
-  geometry::Inclusion inc;
-  inc.shape = std::move(shape);
-  inc.phase = 2;
-  s.inclusions.push_back(inc);
-  return s;
-}
-
-// [0,1]² with the square [0.25,0.75]² as phase 2 (a void when asked).
-geometry::SceneDesc square_scene(bool inclusion_is_void) {
-  return one_inclusion_scene(2, 1, geometry::Polygon{{{0.25, 0.25}, {0.75, 0.25}, {0.75, 0.75}, {0.25, 0.75}}},
-                             "square", inclusion_is_void);
-}
-
-bool in_square(const Vec2& p) { return p[0] > 0.25 && p[0] < 0.75 && p[1] > 0.25 && p[1] < 0.75; }
-
-Vec2 centroid(const mesh::Mesh2& m, std::size_t c) {
-  Vec2 g{0, 0};
-  for (int k = 0; k < 3; ++k)
-    for (int d = 0; d < 2; ++d) g[d] += m.point(m.cell(c)[k])[d] / 3;
-  return g;
-}
-
-// 4×4 grid of h = 0.25, phase 2 where the centroid is in the square.
-mesh::Mesh2 square_mesh() {
-  mesh::Mesh2 m = structured_triangles(4, 4, 0.25);
-  for (std::size_t c = 0; c < m.cell_count(); ++c) m.cell_phase[c] = in_square(centroid(m, c)) ? 2 : 1;
-  return m;
-}
-
-// Keeps the cells `keep` says yes to, drops the nodes no kept cell uses.
-template <int Dim, class Keep>
-mesh::SimplexMesh<Dim> filtered(const mesh::SimplexMesh<Dim>& m, Keep keep) {
-  mesh::SimplexMesh<Dim> out;
-  std::vector<LocalId> new_id(m.node_count(), -1);
-  for (std::size_t c = 0; c < m.cell_count(); ++c) {
-    if (!keep(c)) continue;
-    std::array<LocalId, Dim + 1> t;
-    for (int k = 0; k <= Dim; ++k) {
-      LocalId& n = new_id[m.cell(c)[k]];
-      if (n < 0) n = add_node(out, m.point(m.cell(c)[k]));
-      t[k] = n;
-    }
-    add_cell<Dim>(out, t, m.cell_phase[c]);
-  }
-  return out;
-}
 
 TEST(Fidelity, ConformingSquareInclusionPasses) {
   const geometry::Oracle2 oracle(square_scene(false));
@@ -178,39 +122,6 @@ TEST(CertifyWithScene, SquareInclusionAndVoid) {
     EXPECT_FALSE(h.passed());
     EXPECT_FALSE(h.fidelity->ok);
   }
-}
-
-// [0,6]³ of unit cubes with the cube [1,5]³ as phase 2 (a void when asked), given as a
-// closed surface of 12 outward triangles: the mesh conforms to it exactly.
-geometry::SceneDesc cube_scene(bool inclusion_is_void) {
-  auto corner = [](int i) { return Vec3{i & 1 ? 5.0 : 1.0, i & 2 ? 5.0 : 1.0, i & 4 ? 5.0 : 1.0}; };
-  const int quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
-  geometry::StlSurface surface;
-  surface.file = "cube.stl";
-  for (const auto& q : quads) {
-    surface.triangles.push_back({corner(q[0]), corner(q[1]), corner(q[2])});
-    surface.triangles.push_back({corner(q[0]), corner(q[2]), corner(q[3])});
-  }
-  return one_inclusion_scene(3, 6, surface, "cube", inclusion_is_void);
-}
-
-Vec3 centroid(const mesh::Mesh3& m, std::size_t c) {
-  Vec3 g{0, 0, 0};
-  for (int k = 0; k < 4; ++k)
-    for (int d = 0; d < 3; ++d) g[d] += m.point(m.cell(c)[k])[d] / 4;
-  return g;
-}
-
-bool in_cube(const Vec3& p) {
-  for (int d = 0; d < 3; ++d)
-    if (!(p[d] > 1 && p[d] < 5)) return false;
-  return true;
-}
-
-mesh::Mesh3 cube_mesh() {
-  mesh::Mesh3 m = structured_tets(6, 6, 6);
-  for (std::size_t c = 0; c < m.cell_count(); ++c) m.cell_phase[c] = in_cube(centroid(m, c)) ? 2 : 1;
-  return m;
 }
 
 TEST(Fidelity3, ConformingCubeInclusionPasses) {
