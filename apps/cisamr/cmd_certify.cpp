@@ -6,7 +6,12 @@
 // are checked too (quality::certify_cohesive). Exit status 3 when the mesh fails, 0 when it passes.
 #include <cstdio>
 #include <algorithm>
+#include <atomic>
 #include <cctype>
+#include <chrono>
+#include <condition_variable>
+#include <mutex>
+#include <thread>
 #include <exception>
 #include <filesystem>
 #include <map>
@@ -33,6 +38,7 @@ struct CertifyArgs {
   double bound = 0;  // 0: the dimension's bound
   double fidelity_tolerance = -1;  // < 0: 1e-9 of the domain diagonal
   bool whole = false;              // a .pvtu merged and read whole, not piece by piece
+  int threads = 0;                 // pieces checked at once; set from the hardware
 };
 
 void progress(const GlobalFlags& flags, const char* what) {
@@ -233,34 +239,91 @@ std::optional<quality::Certificate> certify_pieces(const CertifyArgs& args, cons
     if (!certifier.ids_usable()) return std::nullopt;
   }
   const std::vector<quality::PhaseMapEntry> map = phase_map_of(args);
-  std::vector<quality::MeshPhase> all_phases;
-  std::map<int, int> scene_id;
-  for (std::size_t k = 0; k < pieces.size(); ++k) {
-    if (show_progress(flags))
-      std::fprintf(stderr, "cisamr: checking piece %zu of %zu\n", k + 1, pieces.size());
-    io::LoadedMesh loaded;
-    {
-      ScopedPhase timer(&times, "read mesh");
-      loaded = io::read_mesh(pieces[k]);
-    }
-    if (loaded.dimension != Dim)
-      throw InputError(pieces[k], "", "is " + std::to_string(loaded.dimension) + "D, the first piece " +
-                                          std::to_string(Dim) + "D");
-    mesh::SimplexMesh<Dim>& piece = [&]() -> mesh::SimplexMesh<Dim>& {
-      if constexpr (Dim == 2) return loaded.mesh2;
-      else return loaded.mesh3;
-    }();
-    const std::vector<quality::MeshPhase> here = mesh_phases_of(loaded);  // in the order of loaded.phases
-    for (std::size_t i = 0; i < here.size(); ++i)
-      if (std::none_of(all_phases.begin(), all_phases.end(), [&](const auto& q) { return q.id == here[i].id; })) {
-        all_phases.push_back(here[i]);
-        phases.push_back(loaded.phases[i]);
+  certifier.end_first_pass();
+
+  // Pieces read and checked on `threads` threads, added in piece order on this one (the
+  // result, and the first bad piece reported, do not depend on the threads).
+  struct Slot {
+    std::optional<typename quality::PiecewiseCertifier<Dim>::CheckedPiece> checked;
+    std::vector<quality::MeshPhase> mesh_phases;
+    std::vector<geometry::Phase> phases;
+    std::exception_ptr error;
+    bool done = false;
+  };
+  std::vector<Slot> slots(pieces.size());
+  std::mutex mutex;
+  std::condition_variable ready;
+  std::atomic<std::size_t> next{0};
+  std::atomic<bool> stop{false};
+  const auto work = [&](PhaseTimes& worker_times) {
+    for (std::size_t k; !stop && (k = next++) < pieces.size();) {
+      Slot result;
+      try {
+        io::LoadedMesh loaded;
+        {
+          ScopedPhase timer(&worker_times, "read mesh");
+          loaded = io::read_mesh(pieces[k]);
+        }
+        if (loaded.dimension != Dim)
+          throw InputError(pieces[k], "", "is " + std::to_string(loaded.dimension) + "D, the first piece " +
+                                              std::to_string(Dim) + "D");
+        mesh::SimplexMesh<Dim>& piece = [&]() -> mesh::SimplexMesh<Dim>& {
+          if constexpr (Dim == 2) return loaded.mesh2;
+          else return loaded.mesh3;
+        }();
+        result.mesh_phases = mesh_phases_of(loaded);  // in the order of loaded.phases
+        result.phases = loaded.phases;
+        if (scene)
+          quality::relabel_phases<Dim>(piece, quality::match_phases(result.mesh_phases, scene->phases,
+                                                                    entries_naming(map, result.mesh_phases), pieces[k]));
+        ScopedPhase timer(&worker_times, "certify");
+        result.checked = certifier.check_piece(piece, pieces[k]);
+      } catch (...) {
+        result.error = std::current_exception();
       }
-    if (scene)
-      quality::relabel_phases<Dim>(piece, quality::match_phases(here, scene->phases, entries_naming(map, here), pieces[k]));
-    ScopedPhase timer(&times, "certify");
-    certifier.add_piece(piece, pieces[k]);
+      const std::lock_guard<std::mutex> lock(mutex);
+      result.done = true;
+      slots[k] = std::move(result);
+      ready.notify_all();
+    }
+  };
+  const std::size_t thread_count = std::min<std::size_t>(static_cast<std::size_t>(args.threads), pieces.size());
+  std::vector<PhaseTimes> worker_times(thread_count);
+  std::vector<std::thread> workers;
+  std::vector<quality::MeshPhase> all_phases;
+  const auto wall = std::chrono::steady_clock::now();
+  {
+    // Joins the workers however this block ends (an error stops them after their piece).
+    struct Join {
+      std::vector<std::thread>& threads;
+      std::atomic<bool>& stop;
+      ~Join() {
+        stop = true;
+        for (std::thread& t : threads) t.join();
+      }
+    } join{workers, stop};
+    for (std::size_t t = 0; t < thread_count; ++t) workers.emplace_back(work, std::ref(worker_times[t]));
+    for (std::size_t k = 0; k < pieces.size(); ++k) {
+      if (show_progress(flags)) std::fprintf(stderr, "cisamr: checking piece %zu of %zu\n", k + 1, pieces.size());
+      Slot slot;
+      {
+        std::unique_lock<std::mutex> lock(mutex);
+        ready.wait(lock, [&] { return slots[k].done; });
+        slot = std::move(slots[k]);
+      }
+      if (slot.error) std::rethrow_exception(slot.error);
+      for (std::size_t i = 0; i < slot.mesh_phases.size(); ++i)
+        if (std::none_of(all_phases.begin(), all_phases.end(), [&](const auto& q) { return q.id == slot.mesh_phases[i].id; })) {
+          all_phases.push_back(slot.mesh_phases[i]);
+          phases.push_back(slot.phases[i]);
+        }
+      ScopedPhase timer(&times, "add");
+      certifier.add_checked(std::move(*slot.checked));
+    }
   }
+  times.add("pieces (wall)", std::chrono::duration<double>(std::chrono::steady_clock::now() - wall).count());
+  for (const PhaseTimes& w : worker_times)
+    for (const auto& [name, seconds] : w.phases()) times.add(name + " (threads)", seconds);
   std::sort(all_phases.begin(), all_phases.end(), [](const auto& a, const auto& b) { return a.id < b.id; });
   std::sort(phases.begin(), phases.end(), [](const auto& a, const auto& b) { return a.id < b.id; });
   ScopedPhase timer(&times, "certify");
@@ -318,6 +381,11 @@ void add_certify_command(CLI::App& app, GlobalFlags& flags, int& exit_code) {
   cmd->add_flag("--whole", args->whole,
                "Read a .pvtu whole, its pieces merged by global id (by default it is certified piece by piece, "
                "in memory bounded by the largest piece and the border between pieces)");
+  args->threads = static_cast<int>(std::clamp(std::thread::hardware_concurrency(), 1u, 4u));
+  cmd->add_option("--threads", args->threads,
+                  "Pieces of a .pvtu checked at once, each on its own thread, each holding one piece in memory "
+                  "(default: the cores, at most 4)")
+      ->check(CLI::Range(1, 256));
   cmd->add_option("--html", args->html, "Write the certificate as a self-contained HTML page")->check(output_path());
   cmd->add_option("--json", args->json, "Write the certificate as JSON")->check(output_path());
   cmd->add_option("--bound", args->bound,
@@ -359,7 +427,7 @@ void add_certify_command(CLI::App& app, GlobalFlags& flags, int& exit_code) {
     FILE* summary = io::is_standard_output(args->json) || io::is_standard_output(args->html) ? stderr : stdout;
     if (!flags.quiet) std::fputs(quality::certificate_summary(c).c_str(), summary);
     if (flags.verbose)
-      for (const auto& [name, seconds] : times.phases()) std::fprintf(summary, "  %-10s %8.3f s\n", name.c_str(), seconds);
+      for (const auto& [name, seconds] : times.phases()) std::fprintf(summary, "  %-20s %8.3f s\n", name.c_str(), seconds);
     exit_code = c.passed() ? 0 : 3;
   });
 }

@@ -101,6 +101,24 @@ void add_counts(ConformityReport& total, const ConformityReport& piece, const st
   prefix_examples(total.examples, from, name);
 }
 
+void add_fidelity_counts(FidelityReport& total, const FidelityReport& piece, const std::string& name) {
+  total.nodes_off_phase += piece.nodes_off_phase;
+  total.interface_nodes_off_interface += piece.interface_nodes_off_interface;
+  total.boundary_nodes_off_void += piece.boundary_nodes_off_void;
+  total.cells_unknown_phase += piece.cells_unknown_phase;
+  total.nodes_beyond_strict += piece.nodes_beyond_strict;
+  total.cells_off_phase += piece.cells_off_phase;
+  total.cells_wrong_phase += piece.cells_wrong_phase;
+  total.max_deviation = std::max(total.max_deviation, piece.max_deviation);
+  total.max_centroid_ratio = std::max(total.max_centroid_ratio, piece.max_centroid_ratio);
+  for (std::size_t k = 0; k < total.phase_measure.size() && k < piece.phase_measure.size(); ++k)
+    total.phase_measure[k] += piece.phase_measure[k];
+  const std::size_t from = total.examples.size();
+  for (const std::string& e : piece.examples)
+    if (total.examples.size() < kMaxExamples) total.examples.push_back(e);
+  prefix_examples(total.examples, from, name);
+}
+
 // The worst cells of two lists (cell ids over all pieces), worst first, ties by smaller id.
 void merge_worst(std::vector<AspectStats::Worst>& total, const std::vector<AspectStats::Worst>& part,
                  std::size_t cell_offset, int keep) {
@@ -144,6 +162,8 @@ struct PiecewiseCertifier<Dim>::State {
   std::vector<double> shared_coords;
   std::vector<bool> shared_used;
   std::vector<detail::NodeVerdict> shared_verdict;
+  std::vector<GlobalId> shared_ids;  // by rank
+  GlobalId shared_ids_by_rank(std::size_t rank) const { return shared_ids[rank]; }
   std::vector<detail::BorderFacetUse<Dim>> shared_facets;  // nodes: shared ranks
   std::vector<std::array<GlobalId, Dim>> open_facets;
   std::vector<std::pair<GlobalId, std::array<double, Dim>>> open_nodes;  // unshared nodes of open facets
@@ -160,6 +180,7 @@ struct PiecewiseCertifier<Dim>::State {
     shared_coords.assign(Dim * shared.size(), std::numeric_limits<double>::quiet_NaN());
     shared_used.assign(shared.size(), false);
     shared_verdict.assign(shared.size(), detail::NodeVerdict{});
+    shared.for_each([&](GlobalId id) { shared_ids.push_back(id); });
     if (scene) fidelity = detail::start_fidelity<Dim>(*oracle, scene->fidelity_tolerance, scene->exact_measures);
   }
 };
@@ -211,11 +232,46 @@ bool PiecewiseCertifier<Dim>::ids_usable() const {
 }
 
 template <int Dim>
-void PiecewiseCertifier<Dim>::add_piece(const mesh::SimplexMesh<Dim>& m, const std::string& name) {
-  State& s = *s_;
-  if (!s.started) s.start();
+struct PiecewiseCertifier<Dim>::Checked {
+  std::string name;
+  std::size_t cells = 0;
+  std::map<int, std::size_t> cells_per_phase;
+  AspectStats aspect;
+  ConformityReport conformity;
+  std::vector<detail::BorderFacetUse<Dim>> shared_facets;  // nodes: shared ranks; cells: the piece's
+  std::vector<std::array<GlobalId, Dim>> open_facets;
+  std::vector<std::pair<GlobalId, std::array<double, Dim>>> open_nodes;
+  struct SharedNode {
+    LocalId local = 0;
+    std::size_t rank = 0;
+    std::array<double, Dim> point{};
+    bool used = false;
+    detail::NodeVerdict verdict;
+  };
+  std::vector<SharedNode> shared_nodes;
+  std::optional<FidelityReport> fidelity;  // this piece's counts
+};
+
+template <int Dim>
+void PiecewiseCertifier<Dim>::end_first_pass() {
+  if (!s_->started) s_->start();
+}
+
+template <int Dim>
+void PiecewiseCertifier<Dim>::CheckedDeleter::operator()(Checked* c) const {
+  delete c;
+}
+
+template <int Dim>
+typename PiecewiseCertifier<Dim>::CheckedPiece PiecewiseCertifier<Dim>::check_piece(const mesh::SimplexMesh<Dim>& m,
+                                                                                   const std::string& name) const {
+  const State& s = *s_;
+  if (!s.started) throw std::logic_error("PiecewiseCertifier: check_piece before end_first_pass");
   const std::size_t nodes = m.node_count();
   if (m.node_global_id.size() != nodes) throw std::logic_error("PiecewiseCertifier: a piece without global ids");
+  CheckedPiece out(new Checked);
+  out->name = name;
+  out->cells = m.cell_count();
   std::vector<bool> is_shared(nodes);
   for (std::size_t n = 0; n < nodes; ++n) {
     const GlobalId id = m.node_global_id[n];
@@ -224,61 +280,95 @@ void PiecewiseCertifier<Dim>::add_piece(const mesh::SimplexMesh<Dim>& m, const s
                                               ", which the first pass did not see (the piece changed?)");
     is_shared[n] = s.shared.contains(id);
     if (!is_shared[n]) continue;
-    double* stored = &s.shared_coords[Dim * s.shared.rank(id)];
-    const double* p = &m.coords[Dim * n];
-    if (std::isnan(stored[0])) {
-      std::copy(p, p + Dim, stored);
-    } else if (!std::equal(p, p + Dim, stored)) {
-      throw InputError(name, "global_id", "node " + std::to_string(n) + " (global id " + std::to_string(id) + ") is at " +
-                                              point_text<Dim>(p) + " here but at " + point_text<Dim>(stored) +
-                                              " in an earlier piece");
-    }
+    typename Checked::SharedNode node;
+    node.local = LocalId(n);
+    node.rank = s.shared.rank(id);
+    std::copy(&m.coords[Dim * n], &m.coords[Dim * n] + Dim, node.point.begin());
+    out->shared_nodes.push_back(node);
   }
 
   // Cells and aspect ratio.
-  for (std::size_t c = 0; c < m.cell_count(); ++c) ++s.cells_per_phase[c < m.cell_phase.size() ? m.cell_phase[c] : 0];
-  const AspectStats a = aspect_statistics<Dim>(m, s.bound, s.options.worst_count);
-  merge_worst(s.worst, a.worst, s.cells, s.options.worst_count);
-  merge_into(s.aspect, a);
+  for (std::size_t c = 0; c < m.cell_count(); ++c) ++out->cells_per_phase[c < m.cell_phase.size() ? m.cell_phase[c] : 0];
+  out->aspect = aspect_statistics<Dim>(m, s.bound, s.options.worst_count);
 
-  // Conformity.
-  ConformityReport r;
+  // Conformity; the facets between pieces numbered by shared rank.
   detail::PieceBorder<Dim> border;
-  detail::check_piece_conformity<Dim>(m, is_shared, s.domain, s.options.allow_inner_boundary, s.cells, r, border);
-  add_counts(s.conformity, r, name);
-  for (std::size_t n = 0; n < nodes; ++n)
-    if (is_shared[n] && border.used[n]) s.shared_used[s.shared.rank(m.node_global_id[n])] = true;
+  detail::check_piece_conformity<Dim>(m, is_shared, s.domain, s.options.allow_inner_boundary, 0, out->conformity,
+                                      border);
+  for (typename Checked::SharedNode& node : out->shared_nodes) node.used = border.used[std::size_t(node.local)];
+  out->shared_facets.reserve(border.shared_facets.size());
   for (const detail::GlobalFacet<Dim>& g : border.shared_facets) {
     detail::BorderFacetUse<Dim> u;
     for (int k = 0; k < Dim; ++k) u.nodes[k] = static_cast<LocalId>(s.shared.rank(g.ids[k]));
     u.use.cell = g.cell;
     u.use.odd = g.odd;
-    s.shared_facets.push_back(u);
+    out->shared_facets.push_back(u);
   }
-  s.open_facets.insert(s.open_facets.end(), border.open_facets.begin(), border.open_facets.end());
+  out->open_facets = std::move(border.open_facets);
   for (const LocalId n : border.open_nodes) {
     std::array<double, Dim> p;
     for (int d = 0; d < Dim; ++d) p[d] = m.coords[Dim * std::size_t(n) + d];
-    s.open_nodes.emplace_back(m.node_global_id[std::size_t(n)], p);
+    out->open_nodes.emplace_back(m.node_global_id[std::size_t(n)], p);
   }
 
   // Fidelity: the shared nodes' verdicts wait for their phases in every piece.
-  if (s.fidelity) {
+  if (s.scene) {
+    out->fidelity = detail::start_fidelity<Dim>(*s.oracle, s.scene->fidelity_tolerance, s.scene->exact_measures);
     std::vector<std::pair<LocalId, detail::NodeVerdict>> verdicts;
-    const std::size_t from = s.fidelity->examples.size();
-    detail::check_mesh_fidelity<Dim>(m, *s.oracle, s.scene->fidelity_tolerance, -1, &is_shared, &verdicts, *s.fidelity);
-    prefix_examples(s.fidelity->examples, from, name);
+    detail::check_mesh_fidelity<Dim>(m, *s.oracle, s.scene->fidelity_tolerance, -1, &is_shared, &verdicts,
+                                     *out->fidelity);
+    std::size_t i = 0;  // verdicts and shared_nodes both ascend by local id
     for (const auto& [n, v] : verdicts) {
-      detail::NodeVerdict& merged = s.shared_verdict[s.shared.rank(m.node_global_id[std::size_t(n)])];
-      merged.mask |= v.mask;
-      merged.closure = v.closure;
-      merged.beyond_strict = merged.beyond_strict || v.beyond_strict;
-      if (!(v.worst <= merged.worst)) merged.worst = v.worst, merged.worst_phase = v.worst_phase;
+      while (out->shared_nodes[i].local != n) ++i;
+      out->shared_nodes[i].verdict = v;
     }
   }
-  s.cells += m.cell_count();
-  s.largest_piece = std::max(s.largest_piece, m.cell_count());
+  return out;
+}
+
+template <int Dim>
+void PiecewiseCertifier<Dim>::add_checked(CheckedPiece piece) {
+  State& s = *s_;
+  const Checked& p = *piece;
+  for (const typename Checked::SharedNode& node : p.shared_nodes) {
+    double* stored = &s.shared_coords[Dim * node.rank];
+    if (std::isnan(stored[0])) {
+      std::copy(node.point.begin(), node.point.end(), stored);
+    } else if (!std::equal(node.point.begin(), node.point.end(), stored)) {
+      throw InputError(p.name, "global_id",
+                       "node " + std::to_string(node.local) + " (global id " +
+                           std::to_string(s.shared_ids_by_rank(node.rank)) + ") is at " +
+                           point_text<Dim>(node.point.data()) + " here but at " + point_text<Dim>(stored) +
+                           " in an earlier piece");
+    }
+    s.shared_used[node.rank] = s.shared_used[node.rank] || node.used;
+    detail::NodeVerdict& merged = s.shared_verdict[node.rank];
+    const detail::NodeVerdict& v = node.verdict;
+    merged.mask |= v.mask;
+    merged.closure = v.closure;
+    merged.beyond_strict = merged.beyond_strict || v.beyond_strict;
+    if (!(v.worst <= merged.worst)) merged.worst = v.worst, merged.worst_phase = v.worst_phase;
+  }
+  for (const auto& [phase, count] : p.cells_per_phase) s.cells_per_phase[phase] += count;
+  merge_worst(s.worst, p.aspect.worst, s.cells, s.options.worst_count);
+  merge_into(s.aspect, p.aspect);
+  add_counts(s.conformity, p.conformity, p.name);
+  for (detail::BorderFacetUse<Dim> u : p.shared_facets) {
+    u.use.cell += s.cells;
+    s.shared_facets.push_back(u);
+  }
+  s.open_facets.insert(s.open_facets.end(), p.open_facets.begin(), p.open_facets.end());
+  s.open_nodes.insert(s.open_nodes.end(), p.open_nodes.begin(), p.open_nodes.end());
+  if (p.fidelity) add_fidelity_counts(*s.fidelity, *p.fidelity, p.name);
+  s.cells += p.cells;
+  s.largest_piece = std::max(s.largest_piece, p.cells);
   ++s.pieces;
+}
+
+template <int Dim>
+void PiecewiseCertifier<Dim>::add_piece(const mesh::SimplexMesh<Dim>& m, const std::string& name) {
+  end_first_pass();
+  add_checked(check_piece(m, name));
 }
 
 template <int Dim>
@@ -293,7 +383,7 @@ Certificate PiecewiseCertifier<Dim>::finish() {
                      s.open_nodes.end());
   mesh::SimplexMesh<Dim> border;
   border.coords = std::move(s.shared_coords);
-  s.shared.for_each([&](GlobalId id) { border.node_global_id.push_back(id); });
+  border.node_global_id = std::move(s.shared_ids);
   for (const auto& [id, p] : s.open_nodes) {
     border.coords.insert(border.coords.end(), p.begin(), p.end());
     border.node_global_id.push_back(id);

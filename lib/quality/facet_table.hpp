@@ -51,16 +51,24 @@ inline FacetNodes<Dim> sorted_facet(const LocalId* cell_nodes, int f, bool& odd)
 // cells whose node ids are all in [0, node_count) (`valid_cell`), in ascending order of
 // the facet's nodes. Linear: a counting sort by smallest node, then a small sort inside
 // each bucket. Memory: one index per facet occurrence.
+// The smallest node of facet f (the cell's nodes but local vertex f): its bucket.
+template <int Dim>
+inline LocalId facet_min(const LocalId* cell_nodes, int f) {
+  LocalId m = cell_nodes[f == 0 ? 1 : 0];
+  for (int k = 0; k <= Dim; ++k)
+    if (k != f) m = std::min(m, cell_nodes[k]);
+  return m;
+}
+
 template <int Dim, class CellIndex, class Visit>
 void for_each_facet_impl(const mesh::SimplexMesh<Dim>& m, const std::vector<bool>& valid_cell,
                          Visit&& visit) {
   constexpr int F = Dim + 1;
   const std::size_t nodes = m.node_count(), cells = m.cell_count();
   std::vector<std::size_t> offset(nodes + 1, 0);
-  bool odd = false;
   for (std::size_t c = 0; c < cells; ++c)
     if (valid_cell[c])
-      for (int f = 0; f < F; ++f) ++offset[sorted_facet<Dim>(m.cell(c), f, odd)[0] + 1];
+      for (int f = 0; f < F; ++f) ++offset[std::size_t(facet_min<Dim>(m.cell(c), f)) + 1];
   for (std::size_t n = 0; n < nodes; ++n) offset[n + 1] += offset[n];
   std::vector<CellIndex> bucket(offset[nodes]);
   {
@@ -68,32 +76,38 @@ void for_each_facet_impl(const mesh::SimplexMesh<Dim>& m, const std::vector<bool
     for (std::size_t c = 0; c < cells; ++c)
       if (valid_cell[c])
         for (int f = 0; f < F; ++f)
-          bucket[fill[sorted_facet<Dim>(m.cell(c), f, odd)[0]]++] =
-              static_cast<CellIndex>(c * F + f);
+          bucket[fill[std::size_t(facet_min<Dim>(m.cell(c), f))]++] = static_cast<CellIndex>(c * F + f);
   }
+  // Within a bucket the first node is the same: the others, packed in one word, order the
+  // facets (node ids are valid, so non-negative), then the occurrence.
   struct Entry {
+    std::uint64_t rest;
+    std::size_t occurrence;  // cell · F + local facet
     FacetNodes<Dim> nodes;
-    FacetUse use;
+    bool odd;
   };
   std::vector<Entry> entries;
   std::vector<FacetUse> uses;
   for (std::size_t n = 0; n < nodes; ++n) {
     entries.clear();
     for (std::size_t i = offset[n]; i < offset[n + 1]; ++i) {
-      const std::size_t cf = bucket[i];
       Entry e;
-      e.use.cell = cf / F;
-      e.use.local = static_cast<int>(cf % F);
-      e.nodes = sorted_facet<Dim>(m.cell(e.use.cell), e.use.local, e.use.odd);
+      e.occurrence = bucket[i];
+      e.nodes = sorted_facet<Dim>(m.cell(e.occurrence / F), static_cast<int>(e.occurrence % F), e.odd);
+      e.rest = Dim == 2 ? std::uint64_t(std::uint32_t(e.nodes[Dim - 1]))
+                        : std::uint64_t(std::uint32_t(e.nodes[1])) << 32 | std::uint32_t(e.nodes[Dim - 1]);
       entries.push_back(e);
     }
     std::sort(entries.begin(), entries.end(), [](const Entry& a, const Entry& b) {
-      return a.nodes != b.nodes ? a.nodes < b.nodes : a.use.cell * F + a.use.local < b.use.cell * F + b.use.local;
+      return a.rest != b.rest ? a.rest < b.rest : a.occurrence < b.occurrence;
     });
     for (std::size_t i = 0; i < entries.size();) {
       std::size_t j = i;
       uses.clear();
-      while (j < entries.size() && entries[j].nodes == entries[i].nodes) uses.push_back(entries[j++].use);
+      while (j < entries.size() && entries[j].rest == entries[i].rest) {
+        const Entry& e = entries[j++];
+        uses.push_back(FacetUse{e.occurrence / F, static_cast<int>(e.occurrence % F), e.odd});
+      }
       visit(entries[i].nodes, std::span<const FacetUse>(uses));
       i = j;
     }

@@ -40,6 +40,19 @@ class PiecewiseCertifier {
   // the examples it gives. Throws InputError naming `name` when a node's coordinates differ
   // from those another piece gives the same global id.
   void add_piece(const mesh::SimplexMesh<Dim>& piece, const std::string& name);
+
+  // add_piece in two steps, so that pieces are checked on several threads: after
+  // end_first_pass(), check_piece (const: any number of threads at once, each on its own
+  // piece) does the work that needs no other piece; add_checked, called in piece order on
+  // one thread, adds its result (and throws what add_piece throws).
+  struct Checked;
+  struct CheckedDeleter {
+    void operator()(Checked* c) const;
+  };
+  using CheckedPiece = std::unique_ptr<Checked, CheckedDeleter>;
+  void end_first_pass();
+  CheckedPiece check_piece(const mesh::SimplexMesh<Dim>& piece, const std::string& name) const;
+  void add_checked(CheckedPiece piece);
   // The certificate of the whole mesh.
   Certificate finish();
 

@@ -108,6 +108,10 @@ for scene in "$examples/composite.json" "$examples/spheres3d.json"; do
     # shellcheck disable=SC2086
     "$cisamr" certify "$dir/$name-s.pvtu" $with_scene --whole --json "$dir/whole.json" -q
     same_certificate "$dir/pieces.json" "$dir/whole.json" || fail "$name: piece by piece and --whole differ ($with_scene)"
+    # shellcheck disable=SC2086
+    "$cisamr" certify "$dir/$name-s.pvtu" $with_scene --threads 3 --json "$dir/threads.json" -q
+    "$cisamr" certify "$dir/$name-s.pvtu" $with_scene --threads 1 --json "$dir/pieces.json" -q
+    cmp -s "$dir/threads.json" "$dir/pieces.json" || fail "$name: --threads 3 and 1 give different certificates"
   done
 
   if [ -n "$mpiexec" ]; then
