@@ -47,14 +47,20 @@ void check_explode(const MeshArgs& args, const driver::Output& output) {
 
 constexpr int kStreamedPartitionsPerRank = 8;
 
-// --stream writes .pvtu pieces as partitions finish: no one file, no picture of the whole.
+// Whether --stream writes one Gmsh file (else .pvtu pieces).
+bool streams_msh(const MeshArgs& args) {
+  return args.format.empty() ? std::filesystem::path(args.output).extension() == ".msh" : args.format == "msh";
+}
+
+// --stream writes .pvtu pieces, or one .msh from chunks, as partitions finish: no picture of
+// the whole.
 void check_stream(const MeshArgs& args) {
-  if (args.gather) throw InputError("--stream", "", "writes .pvtu pieces as the partitions finish; drop --gather");
+  if (args.gather) throw InputError("--stream", "", "writes the mesh as the partitions finish; drop --gather");
   if (!args.svg.empty())
     throw InputError("--stream", "", "--svg draws the whole mesh, which a streamed run never holds; drop one of them");
   const std::string extension = std::filesystem::path(args.output).extension().string();
-  if (!args.format.empty() || extension != ".pvtu")
-    throw InputError(args.output, "", "--stream writes .pvtu pieces: name the output NAME.pvtu");
+  if (!streams_msh(args) && (!args.format.empty() || extension != ".pvtu"))
+    throw InputError(args.output, "", "--stream writes .pvtu pieces or one Gmsh .msh: name the output NAME.pvtu or NAME.msh");
 }
 
 void run_mesh(MeshArgs& args, const GlobalFlags& flags, int& exit_code) {
@@ -82,11 +88,16 @@ void run_mesh(MeshArgs& args, const GlobalFlags& flags, int& exit_code) {
     if (options.partitions == 0) options.partitions = kStreamedPartitionsPerRank * comm.size();
   }
   // Fail on a bad output name before any work.
+  // A streamed .msh is one file, written on rank 0 from every partition's chunks (as --gather's).
   driver::Output output =
-      driver::plan_output(comm, args.output, args.gather, driver::is_distributed(comm, options), args.format,
+      driver::plan_output(comm, args.output, args.gather || (args.stream && streams_msh(args)),
+                          driver::is_distributed(comm, options), args.format,
                           args.plane == "strain" ? io::PlaneKind::strain : io::PlaneKind::stress);
   if (args.stream) options.stream = output.path;
-  else if (output.pieces && args.svg.empty()) options.stream_if_needed = output.path;
+  // Pieces, or one .msh of a parallel run (--gather): streamed when the mesh would not fit.
+  else if ((output.pieces || (args.gather && streams_msh(args) && driver::is_distributed(comm, options))) &&
+           args.svg.empty())
+    options.stream_if_needed = output.path;
   if (options.pipeline.cohesive)
     parallel::run_collectively(comm, [&] {
       if (!output.pieces && (output.format ? *output.format : io::mesh_format_of(output.path)) == io::MeshFormat::medit)
@@ -100,7 +111,7 @@ void run_mesh(MeshArgs& args, const GlobalFlags& flags, int& exit_code) {
   auto meshed = driver::mesh_scene(comm, args.scene, options);
   std::visit(
       [&](auto& run) {
-        if (run.streamed) {  // one piece per partition (their number may have been chosen for memory)
+        if (run.streamed && output.pieces) {  // one piece per partition (their number may have been chosen for memory)
           output.piece_paths.clear();
           for (std::size_t p = 0; p < run.mesh.partitions.size(); ++p)
             output.piece_paths.push_back(parallel::piece_path(output.path, static_cast<int>(p)));
@@ -178,8 +189,9 @@ void add_mesh_command(CLI::App& app, GlobalFlags& flags, int& exit_code) {
                   "times its centroid's offset, so that the cohesive cells show (for viewing only)")
       ->check(number_in(1, 1e6));
   cmd->add_flag("--stream", args->stream,
-                "Write the mesh while meshing, partition by partition (.pvtu, one piece per partition, global "
-                "node ids), holding one partition per rank at a time (default --partitions: 8 per rank)");
+                "Write the mesh while meshing, partition by partition, holding one partition per rank at a time "
+                "(default --partitions: 8 per rank): .pvtu (one piece per partition, global node ids) or one Gmsh "
+                ".msh (each partition's nodes and elements written as it is done, joined on rank 0)");
   cmd->add_flag("--gather", args->gather,
                 "Parallel run: write one file on rank 0 (any format) instead of .pvtu pieces");
   cmd->add_flag("--fixed-ghost", args->fixed_ghost,

@@ -85,7 +85,9 @@ void check_request(const geometry::SceneDesc& scene, const pipeline::MeshEstimat
     throw InputError(scene.source, field,
                      "the mesh would have about " + about(estimate.total()) + " elements (about " +
                          about(estimate.total() * kBytesPerElement / 1e9) + " GB), more than " + limit_text +
-                         " (--max-elements overrides)");
+                         (options.stream.empty() ? " (--stream writes .pvtu or .msh partition by partition; "
+                                                   "--max-elements overrides)"
+                                                 : " (more --partitions hold less at a time; --max-elements overrides)"));
   }
   if (options.partitions > 0) {
     double cells = 1;

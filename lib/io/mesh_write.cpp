@@ -15,6 +15,7 @@
 #include "core/error.hpp"
 #include "io/atomic_file.hpp"
 #include "io/mesh_io.hpp"
+#include "io/msh_stream.hpp"
 #include "mesh/boundary.hpp"
 #include "mesh/cohesive.hpp"
 #include "mesh/metrics.hpp"
@@ -435,128 +436,170 @@ CohesiveGroups group_cohesive(const mesh::SimplexMesh<Dim>& m, const std::vector
 
 // ------------------------------------------------------------------------------ MSH 4.1
 
-// Bounding box of a set of nodes, as MSH entities give it (3 coordinates, 0 beyond Dim).
-template <int Dim>
-struct EntityBox {
-  double lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
-  bool empty = true;
-  void add(const mesh::SimplexMesh<Dim>& m, LocalId node) {
-    for (int d = 0; d < Dim; ++d) {
-      const double x = m.coords[static_cast<std::size_t>(node) * Dim + d];
-      lo[d] = empty ? x : std::min(lo[d], x);
-      hi[d] = empty ? x : std::max(hi[d], x);
-    }
-    empty = false;
-  }
+// What the head of a .msh names: the phases' cell groups (ascending id), the box faces that
+// carry facets, the cohesive pairs' groups (with their set names).
+struct MshHeadGroups {
+  std::vector<MshGroup> phases, faces, cohesive;
+  std::vector<std::string> cohesive_names;
+  bool placeholder_entity = false;  // nodes but no cells: entity 1 holds them
 };
+
+// $MeshFormat, $PhysicalNames, $Entities. Box faces: entity tag face + 1 (dimension Dim-1),
+// physical tag past every phase id, so that no reader that ignores the dimension of a
+// physical name confuses a face with a phase. Cohesive cells: one Dim-dimensional entity
+// and physical group per phase pair, tagged past the faces' physical tags. One surface (2D)
+// or volume (3D) entity per phase, tagged with the phase id.
+template <int Dim>
+void write_msh_head_sections(TextWriter& out, const MshHeadGroups& g, const std::vector<geometry::Phase>& phases) {
+  constexpr int kFaces = mesh::box_face_count(Dim);
+  const int face_physical_base = (g.phases.empty() ? 0 : g.phases.back().id) + 1;
+  const int cohesive_base = face_physical_base + kFaces;
+  out << "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n";
+  out << "$PhysicalNames\n";
+  out.integer(static_cast<long long>(g.phases.size() + g.faces.size() + g.cohesive.size())) << '\n';
+  for (const MshGroup& phase : g.phases) {
+    std::string name = phase_name(phases, phase.id);
+    std::replace(name.begin(), name.end(), '"', '\'');
+    out.integer(Dim) << ' ';
+    out.integer(phase.id) << " \"" << name << "\"\n";
+  }
+  for (const MshGroup& face : g.faces) {
+    out.integer(Dim - 1) << ' ';
+    out.integer(face_physical_base + face.id) << " \"" << mesh::kBoxFaceNames[static_cast<std::size_t>(face.id)] << "\"\n";
+  }
+  for (std::size_t k = 0; k < g.cohesive.size(); ++k) {
+    out.integer(Dim) << ' ';
+    out.integer(cohesive_base + static_cast<int>(k)) << " \"" << g.cohesive_names[k] << "\"\n";
+  }
+  out << "$EndPhysicalNames\n";
+
+  const auto write_box = [&](const MshBox& box) {
+    for (double x : box.lo) out << ' ', out.real(x);
+    for (double x : box.hi) out << ' ', out.real(x);
+  };
+  const std::size_t volumes = g.phases.size() + (g.placeholder_entity ? 1 : 0) + g.cohesive.size();
+  out << "$Entities\n";
+  if constexpr (Dim == 2) {
+    out << "0 ";
+    out.integer(static_cast<long long>(g.faces.size())) << ' ';
+    out.integer(static_cast<long long>(volumes)) << " 0\n";
+  } else {
+    out << "0 0 ";
+    out.integer(static_cast<long long>(g.faces.size())) << ' ';
+    out.integer(static_cast<long long>(volumes)) << '\n';
+  }
+  for (const MshGroup& face : g.faces) {
+    out.integer(face.id + 1);
+    write_box(face.box);
+    out << " 1 ";
+    out.integer(face_physical_base + face.id) << " 0\n";
+  }
+  for (const MshGroup& phase : g.phases) {
+    out.integer(phase.id);
+    write_box(phase.box);
+    out << " 1 ", out.integer(phase.id) << " 0\n";
+  }
+  if (g.placeholder_entity) out << '1', write_box(MshBox{}), out << " 0 0\n";
+  for (std::size_t k = 0; k < g.cohesive.size(); ++k) {
+    out.integer(cohesive_base + static_cast<int>(k));
+    write_box(g.cohesive[k].box);
+    out << " 1 ", out.integer(cohesive_base + static_cast<int>(k)) << " 0\n";
+  }
+  out << "$EndEntities\n";
+}
+
+// The cells of `m` by phase, each group's count and box.
+template <int Dim>
+std::vector<MshGroup> phase_groups(const mesh::SimplexMesh<Dim>& m, const PhaseGroups& groups) {
+  std::vector<MshGroup> out;
+  for (std::size_t g = 0; g < groups.ids.size(); ++g) {
+    MshGroup group{groups.ids[g], groups.begin[g + 1] - groups.begin[g], {}};
+    for (std::size_t i = groups.begin[g]; i < groups.begin[g + 1]; ++i) {
+      const LocalId* corners = m.cell(groups.order[i]);
+      for (int k = 0; k <= Dim; ++k) group.box.add(&m.coords[static_cast<std::size_t>(corners[k]) * Dim], Dim);
+    }
+    out.push_back(group);
+  }
+  return out;
+}
+
+// The box faces of `sets` that carry facets, each one's count and box.
+template <int Dim>
+std::vector<MshGroup> face_groups(const mesh::SimplexMesh<Dim>& m, const mesh::BoundarySets<Dim>& sets) {
+  std::vector<MshGroup> out;
+  for (int f = 0; f < mesh::box_face_count(Dim); ++f) {
+    const auto& facets = sets.facets[static_cast<std::size_t>(f)];
+    if (facets.empty()) continue;
+    MshGroup group{f, facets.size(), {}};
+    for (const mesh::CellFacet& facet : facets)
+      for (LocalId n : facet_nodes(m, facet)) group.box.add(&m.coords[static_cast<std::size_t>(n) * Dim], Dim);
+    out.push_back(group);
+  }
+  return out;
+}
+
+// A $Nodes / $Elements line of counts: blocks, entries, the first and last tag (1 and entries).
+void write_section_counts(TextWriter& out, std::uint64_t blocks, std::uint64_t entries) {
+  out.integer(static_cast<long long>(blocks)) << ' ';
+  out.integer(static_cast<long long>(entries)) << ' ';
+  out.integer(entries > 0 ? 1 : 0) << ' ';
+  out.integer(static_cast<long long>(entries)) << '\n';
+}
+
+template <int Dim>
+std::array<LocalId, Dim + 1> cell_nodes(const mesh::SimplexMesh<Dim>& m, std::size_t c) {
+  std::array<LocalId, Dim + 1> nodes;
+  std::copy(m.cell(c), m.cell(c) + Dim + 1, nodes.begin());
+  return nodes;
+}
+
+// One element line: tag, then the nodes' numbers (global id + 1 when ids are given).
+template <std::size_t N>
+void write_element(TextWriter& out, std::uint64_t tag, const std::array<LocalId, N>& nodes, const GlobalId* ids) {
+  out.integer(static_cast<long long>(tag));
+  for (LocalId n : nodes) out << ' ', out.integer((ids ? ids[n] : static_cast<GlobalId>(n)) + 1LL);
+  out << '\n';
+}
 
 template <int Dim>
 void write_msh_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m,
                     const std::vector<geometry::Phase>& phases, const MeshWriteOptions& options) {
-  constexpr int kCorners = Dim + 1;
-  constexpr int kFaces = mesh::box_face_count(Dim);
   const std::size_t nodes = m.node_count(), cells = m.cell_count();
   const PhaseGroups groups = group_by_phase(m.cell_phase);
   const mesh::BoundarySets<Dim> sets = boundary_sets_for(m, options);
-  // Box faces that carry facets: entity tag face + 1 (dimension Dim-1), physical tag past
-  // every phase id, so that no reader that ignores the dimension of a physical name
-  // confuses a face with a phase.
-  std::vector<int> faces;
-  for (int f = 0; f < kFaces; ++f)
-    if (!sets.facets[static_cast<std::size_t>(f)].empty()) faces.push_back(f);
-  const int face_physical_base = (groups.ids.empty() ? 0 : groups.ids.back()) + 1;
-  std::size_t facet_total = 0;
-  for (int f : faces) facet_total += sets.facets[static_cast<std::size_t>(f)].size();
-  // Cohesive cells: one Dim-dimensional entity and physical group per phase pair, tagged
-  // past the faces' physical tags (so past every phase id), quadrangles / prisms.
   using Order = mesh::CohesiveOrder<Dim>;
   const CohesiveGroups cohesive = group_cohesive(m, phases);
-  const int cohesive_base = face_physical_base + kFaces;
+  MshHeadGroups head;
+  head.phases = phase_groups(m, groups);
+  head.faces = face_groups(m, sets);
+  head.placeholder_entity = groups.ids.empty() && nodes > 0;
+  for (std::size_t g = 0; g < cohesive.pairs.size(); ++g) {
+    MshGroup group{static_cast<std::int32_t>(g), cohesive.begin[g + 1] - cohesive.begin[g], {}};
+    for (std::size_t i = cohesive.begin[g]; i < cohesive.begin[g + 1]; ++i)
+      for (int k = 0; k < 2 * Dim; ++k)
+        group.box.add(&m.coords[static_cast<std::size_t>(m.cohesive.cell(cohesive.order[i])[k]) * Dim], Dim);
+    head.cohesive.push_back(group);
+  }
+  head.cohesive_names = cohesive.names;
+  std::vector<int> faces;
+  for (const MshGroup& face : head.faces) faces.push_back(face.id);
+  std::size_t facet_total = 0;
+  for (const MshGroup& face : head.faces) facet_total += face.count;
+  const int face_physical_base = (groups.ids.empty() ? 0 : groups.ids.back()) + 1;
+  const int cohesive_base = face_physical_base + mesh::box_face_count(Dim);
+  const int node_entity = groups.ids.empty() ? 1 : groups.ids.front();
 
   TextWriter out(file);
-  out << "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n";
-
-  out << "$PhysicalNames\n";
-  out.integer(static_cast<long long>(groups.ids.size() + faces.size() + cohesive.pairs.size())) << '\n';
-  for (int id : groups.ids) {
-    std::string name = phase_name(phases, id);
-    std::replace(name.begin(), name.end(), '"', '\'');
-    out.integer(Dim) << ' ';
-    out.integer(id) << " \"" << name << "\"\n";
-  }
-  for (int f : faces) {
-    out.integer(Dim - 1) << ' ';
-    out.integer(face_physical_base + f) << " \"" << mesh::kBoxFaceNames[static_cast<std::size_t>(f)] << "\"\n";
-  }
-  for (std::size_t g = 0; g < cohesive.pairs.size(); ++g) {
-    out.integer(Dim) << ' ';
-    out.integer(cohesive_base + static_cast<int>(g)) << " \"" << cohesive.names[g] << "\"\n";
-  }
-  out << "$EndPhysicalNames\n";
-
-  // One surface (2D) or volume (3D) entity per phase, tagged with the phase id; a mesh
-  // without cells still needs an entity to hold its nodes. One curve (2D) or surface (3D)
-  // per box face that carries facets.
-  std::vector<int> entity_tags = groups.ids;
-  const bool placeholder_entity = entity_tags.empty() && nodes > 0;
-  if (placeholder_entity) entity_tags.push_back(1);
-  const auto write_box = [&](const EntityBox<Dim>& box) {
-    for (double x : box.lo) out << ' ', out.real(x);
-    for (double x : box.hi) out << ' ', out.real(x);
-  };
-  out << "$Entities\n";
-  if constexpr (Dim == 2) {
-    out << "0 ";
-    out.integer(static_cast<long long>(faces.size())) << ' ';
-    out.integer(static_cast<long long>(entity_tags.size() + cohesive.pairs.size())) << " 0\n";
-  } else {
-    out << "0 0 ";
-    out.integer(static_cast<long long>(faces.size())) << ' ';
-    out.integer(static_cast<long long>(entity_tags.size() + cohesive.pairs.size())) << '\n';
-  }
-  for (int f : faces) {
-    EntityBox<Dim> box;
-    for (const mesh::CellFacet& facet : sets.facets[static_cast<std::size_t>(f)])
-      for (LocalId n : facet_nodes(m, facet)) box.add(m, n);
-    out.integer(f + 1);
-    write_box(box);
-    out << " 1 ";
-    out.integer(face_physical_base + f) << " 0\n";
-  }
-  for (std::size_t g = 0; g < entity_tags.size(); ++g) {
-    EntityBox<Dim> box;
-    if (!placeholder_entity)
-      for (std::size_t i = groups.begin[g]; i < groups.begin[g + 1]; ++i) {
-        const LocalId* corners = m.cell(groups.order[i]);
-        for (int k = 0; k < kCorners; ++k) box.add(m, corners[k]);
-      }
-    out.integer(entity_tags[g]);
-    write_box(box);
-    if (placeholder_entity)
-      out << " 0 0\n";
-    else
-      out << " 1 ", out.integer(entity_tags[g]) << " 0\n";
-  }
-  for (std::size_t g = 0; g < cohesive.pairs.size(); ++g) {
-    EntityBox<Dim> box;
-    for (std::size_t i = cohesive.begin[g]; i < cohesive.begin[g + 1]; ++i)
-      for (int k = 0; k < 2 * Dim; ++k) box.add(m, m.cohesive.cell(cohesive.order[i])[k]);
-    out.integer(cohesive_base + static_cast<int>(g));
-    write_box(box);
-    out << " 1 ", out.integer(cohesive_base + static_cast<int>(g)) << " 0\n";
-  }
-  out << "$EndEntities\n";
+  write_msh_head_sections<Dim>(out, head, phases);
 
   // All nodes in one block on the first entity (a node shared by phases has one home).
   out << "$Nodes\n";
   if (nodes == 0) {
     out << "0 0 0 0\n";
   } else {
-    out << "1 ";
-    out.integer(static_cast<long long>(nodes)) << " 1 ";
-    out.integer(static_cast<long long>(nodes)) << '\n';
+    write_section_counts(out, 1, nodes);
     out.integer(Dim) << ' ';
-    out.integer(entity_tags.front()) << " 0 ";
+    out.integer(node_entity) << " 0 ";
     out.integer(static_cast<long long>(nodes)) << '\n';
     for (std::size_t n = 0; n < nodes; ++n) out.integer(static_cast<long long>(n + 1)) << '\n';
     for (std::size_t n = 0; n < nodes; ++n) {
@@ -573,21 +616,12 @@ void write_msh_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m,
   // boundary lines / triangles follow, face by face.
   const std::size_t elements = cells + facet_total + m.cohesive.count();
   out << "$Elements\n";
-  out.integer(static_cast<long long>(groups.ids.size() + faces.size() + cohesive.pairs.size())) << ' ';
-  out.integer(static_cast<long long>(elements)) << ' ';
-  out.integer(elements > 0 ? 1 : 0) << ' ';
-  out.integer(static_cast<long long>(elements)) << '\n';
+  write_section_counts(out, groups.ids.size() + faces.size() + cohesive.pairs.size(), elements);
   for (std::size_t g = 0; g < groups.ids.size(); ++g) {
     out.integer(Dim) << ' ';
     out.integer(groups.ids[g]) << (Dim == 2 ? " 2 " : " 4 ");
     out.integer(static_cast<long long>(groups.begin[g + 1] - groups.begin[g])) << '\n';
-    for (std::size_t i = groups.begin[g]; i < groups.begin[g + 1]; ++i) {
-      const std::size_t c = groups.order[i];
-      out.integer(static_cast<long long>(c + 1));
-      const LocalId* corners = m.cell(c);
-      for (int k = 0; k < kCorners; ++k) out << ' ', out.integer(corners[k] + 1LL);
-      out << '\n';
-    }
+    for (std::size_t i = groups.begin[g]; i < groups.begin[g + 1]; ++i) write_element(out, groups.order[i] + 1, cell_nodes<Dim>(m, groups.order[i]), nullptr);
   }
   std::size_t tag = cells;
   for (int f : faces) {
@@ -595,11 +629,7 @@ void write_msh_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m,
     out.integer(Dim - 1) << ' ';
     out.integer(f + 1) << (Dim == 2 ? " 1 " : " 2 ");
     out.integer(static_cast<long long>(facets.size())) << '\n';
-    for (const mesh::CellFacet& facet : facets) {
-      out.integer(static_cast<long long>(++tag));
-      for (LocalId n : facet_nodes(m, facet)) out << ' ', out.integer(n + 1LL);
-      out << '\n';
-    }
+    for (const mesh::CellFacet& facet : facets) write_element(out, ++tag, facet_nodes(m, facet), nullptr);
   }
   for (std::size_t g = 0; g < cohesive.pairs.size(); ++g) {
     out.integer(Dim) << ' ';
@@ -653,6 +683,171 @@ void write_msh_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m,
   }
   out.flush();
 }
+
+// ---- streamed (msh_stream.hpp) ----
+
+template <int Dim>
+void write_node_coordinates(TextWriter& out, const double* p) {
+  for (int d = 0; d < Dim; ++d) {
+    if (d > 0) out << ' ';
+    out.real(p[d]);
+  }
+  out << (Dim == 2 ? " 0\n" : "\n");
+}
+
+}  // namespace
+
+void MshBox::add(const double* p, int dim) {
+  for (int d = 0; d < dim; ++d) {
+    lo[d] = empty ? p[d] : std::min(lo[d], p[d]);
+    hi[d] = empty ? p[d] : std::max(hi[d], p[d]);
+  }
+  empty = false;
+}
+
+void MshBox::add(const MshBox& other) {
+  if (other.empty) return;
+  for (int d = 0; d < 3; ++d) {
+    lo[d] = empty ? other.lo[d] : std::min(lo[d], other.lo[d]);
+    hi[d] = empty ? other.hi[d] : std::max(hi[d], other.hi[d]);
+  }
+  empty = false;
+}
+
+template <int Dim>
+MshPartSummary msh_part_summary(const mesh::SimplexMesh<Dim>& m, const MeshWriteOptions& options) {
+  if (!options.face_box) throw std::invalid_argument("msh_part_summary: the domain's face box is needed");
+  MshPartSummary s;
+  s.cells = m.cell_count();
+  s.phases = phase_groups(m, group_by_phase(m.cell_phase));
+  for (const MshGroup& face : face_groups(m, boundary_sets_for(m, options))) s.faces[static_cast<std::size_t>(face.id)] = face;
+  return s;
+}
+
+int msh_node_entity(const std::vector<MshPartSummary>& parts) {
+  int entity = 0;
+  bool any = false;
+  for (const MshPartSummary& p : parts)
+    for (const MshGroup& g : p.phases) entity = any ? std::min(entity, g.id) : g.id, any = true;
+  return any ? entity : 1;
+}
+
+template <int Dim>
+void write_msh_head(AtomicFile& file, const std::vector<MshPartSummary>& parts, const std::vector<geometry::Phase>& phases) {
+  MshHeadGroups head;
+  std::uint64_t nodes = 0;
+  std::array<MshGroup, 6> faces{};
+  for (const MshPartSummary& p : parts) {
+    nodes += p.owned_nodes;
+    for (const MshGroup& g : p.phases) {
+      auto at = std::lower_bound(head.phases.begin(), head.phases.end(), g.id,
+                                 [](const MshGroup& a, std::int32_t id) { return a.id < id; });
+      if (at == head.phases.end() || at->id != g.id) at = head.phases.insert(at, MshGroup{g.id, 0, {}});
+      at->count += g.count;
+      at->box.add(g.box);
+    }
+    for (int f = 0; f < mesh::box_face_count(Dim); ++f) {
+      MshGroup& face = faces[static_cast<std::size_t>(f)];
+      face.id = f;
+      face.count += p.faces[static_cast<std::size_t>(f)].count;
+      face.box.add(p.faces[static_cast<std::size_t>(f)].box);
+    }
+  }
+  for (int f = 0; f < mesh::box_face_count(Dim); ++f)
+    if (faces[static_cast<std::size_t>(f)].count > 0) head.faces.push_back(faces[static_cast<std::size_t>(f)]);
+  head.placeholder_entity = head.phases.empty() && nodes > 0;
+  TextWriter out(file);
+  write_msh_head_sections<Dim>(out, head, phases);
+  std::size_t blocks = 0;
+  for (const MshPartSummary& p : parts) blocks += p.owned_nodes > 0 ? 1 : 0;
+  out << "$Nodes\n";
+  write_section_counts(out, blocks, nodes);
+  out.flush();
+}
+
+void write_msh_elements_head(AtomicFile& file, const std::vector<MshPartSummary>& parts) {
+  std::uint64_t blocks = 0, elements = 0;
+  for (const MshPartSummary& p : parts) {
+    blocks += p.phases.size();
+    elements += p.cells;
+    for (const MshGroup& face : p.faces) blocks += face.count > 0 ? 1 : 0, elements += face.count;
+  }
+  TextWriter out(file);
+  out << "$EndNodes\n$Elements\n";
+  write_section_counts(out, blocks, elements);
+  out.flush();
+}
+
+void write_msh_tail(AtomicFile& file) { file.write("$EndElements\n"); }
+
+template <int Dim>
+void write_msh_node_chunk(AtomicFile& file, const mesh::SimplexMesh<Dim>& m, GlobalId first_owned, std::uint64_t owned,
+                          int node_entity) {
+  if (owned == 0) return;
+  TextWriter out(file);
+  out.integer(Dim) << ' ';
+  out.integer(node_entity) << " 0 ";
+  out.integer(static_cast<long long>(owned)) << '\n';
+  for (std::uint64_t k = 0; k < owned; ++k) out.integer(first_owned + static_cast<long long>(k) + 1) << '\n';
+  // The owned nodes in local order are the ids first_owned, first_owned + 1, … (owned-first numbering).
+  const GlobalId end = first_owned + static_cast<GlobalId>(owned);
+  std::uint64_t written = 0;
+  for (std::size_t n = 0; n < m.node_count(); ++n) {
+    const GlobalId id = m.node_global_id[n];
+    if (id < first_owned || id >= end) continue;
+    if (id != first_owned + static_cast<GlobalId>(written))
+      throw std::logic_error("write_msh_node_chunk: the owned ids are not one ascending run");
+    write_node_coordinates<Dim>(out, &m.coords[n * Dim]);
+    ++written;
+  }
+  if (written != owned) throw std::logic_error("write_msh_node_chunk: owned nodes missing");
+  out.flush();
+}
+
+template <int Dim>
+void write_msh_cell_chunk(AtomicFile& file, const mesh::SimplexMesh<Dim>& m, std::uint64_t first_cell_tag) {
+  const PhaseGroups groups = group_by_phase(m.cell_phase);
+  TextWriter out(file);
+  for (std::size_t g = 0; g < groups.ids.size(); ++g) {
+    out.integer(Dim) << ' ';
+    out.integer(groups.ids[g]) << (Dim == 2 ? " 2 " : " 4 ");
+    out.integer(static_cast<long long>(groups.begin[g + 1] - groups.begin[g])) << '\n';
+    for (std::size_t i = groups.begin[g]; i < groups.begin[g + 1]; ++i)
+      write_element(out, first_cell_tag + groups.order[i] + 1, cell_nodes<Dim>(m, groups.order[i]), m.node_global_id.data());
+  }
+  out.flush();
+}
+
+template <int Dim>
+void write_msh_face_chunks(const std::array<AtomicFile*, 6>& faces, const mesh::SimplexMesh<Dim>& m,
+                           const MeshWriteOptions& options, const std::array<std::uint64_t, 6>& first_facet_tag) {
+  const mesh::BoundarySets<Dim> sets = boundary_sets_for(m, options);
+  for (int f = 0; f < mesh::box_face_count(Dim); ++f) {
+    const auto& facets = sets.facets[static_cast<std::size_t>(f)];
+    if (facets.empty()) continue;
+    TextWriter out(*faces[static_cast<std::size_t>(f)]);
+    out.integer(Dim - 1) << ' ';
+    out.integer(f + 1) << (Dim == 2 ? " 1 " : " 2 ");
+    out.integer(static_cast<long long>(facets.size())) << '\n';
+    std::uint64_t tag = first_facet_tag[static_cast<std::size_t>(f)];
+    for (const mesh::CellFacet& facet : facets) write_element(out, ++tag, facet_nodes(m, facet), m.node_global_id.data());
+    out.flush();
+  }
+}
+
+#define CISAMR_MSH_STREAM(D)                                                                                        \
+  template MshPartSummary msh_part_summary<D>(const mesh::SimplexMesh<D>&, const MeshWriteOptions&);                \
+  template void write_msh_head<D>(AtomicFile&, const std::vector<MshPartSummary>&,                                  \
+                                  const std::vector<geometry::Phase>&);                                             \
+  template void write_msh_node_chunk<D>(AtomicFile&, const mesh::SimplexMesh<D>&, GlobalId, std::uint64_t, int);    \
+  template void write_msh_cell_chunk<D>(AtomicFile&, const mesh::SimplexMesh<D>&, std::uint64_t);                   \
+  template void write_msh_face_chunks<D>(const std::array<AtomicFile*, 6>&, const mesh::SimplexMesh<D>&,            \
+                                         const MeshWriteOptions&, const std::array<std::uint64_t, 6>&);
+CISAMR_MSH_STREAM(2)
+CISAMR_MSH_STREAM(3)
+#undef CISAMR_MSH_STREAM
+
+namespace {
 
 // ------------------------------------------------------------------------------ INP
 

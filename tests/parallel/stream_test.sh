@@ -1,6 +1,6 @@
 #!/bin/bash
 # `cisamr mesh --stream` (issue #15): partitions meshed one after another and written as
-# .vtu pieces of their own. On a 2D and a 3D example: the streamed mesh is the sequential
+# .vtu pieces of their own, or as one Gmsh .msh joined from every partition's chunks. On a 2D and a 3D example: the streamed mesh is the sequential
 # one (report checksum), on 1 rank and under mpiexec; VTK reads the pieces back and finds
 # exactly the in-memory path's mesh for the same partitions (global id -> point, cells as
 # global ids with their phase); certify checks the streamed .pvtu against the scene; a mesh
@@ -14,6 +14,29 @@ trap 'rm -rf "$dir"' EXIT
 fail() { echo "FAIL: $*"; exit 1; }
 run_mpi() { local n=$1; shift; timeout 60 "$mpiexec" -n "$n" --oversubscribe --allow-run-as-root "$@"; }
 checksum() { sed -n 's/.*"checksum": "\([0-9a-f]*\)".*/\1/p' "$1"; }
+
+# The same .msh content through meshio: cells and boundary facets as sets of coordinates
+# with their physical tag, and the physical names (node numbering may differ).
+same_msh() {  # same_msh A.msh B.msh
+  /usr/bin/python3 - "$1" "$2" <<'EOF'
+import sys
+import meshio
+import numpy as np
+def load(path):
+    m = meshio.read(path)
+    cells = {}
+    for block, tags in zip(m.cells, m.cell_data["gmsh:physical"]):
+        keys = [tuple(sorted(map(tuple, c))) for c in m.points[block.data]]
+        cells.setdefault(block.type, []).extend(zip(keys, tags.tolist()))
+    names = {k: v.tolist() for k, v in m.field_data.items()}
+    return len(m.points), {k: sorted(v) for k, v in cells.items()}, names
+a, b = load(sys.argv[1]), load(sys.argv[2])
+if a != b:
+    print("differ:", a[0], b[0], {k: len(v) for k, v in a[1].items()}, {k: len(v) for k, v in b[1].items()}, a[2], b[2])
+    sys.exit(1)
+print(f"same .msh: {a[0]} nodes, " + ", ".join(f"{len(v)} {k}" for k, v in a[1].items()))
+EOF
+}
 
 # Two certificates (JSON) with the same verdicts and counts: the notes, the examples (which
 # name pieces or not) and the sums' last digits (order of summation) aside.
@@ -114,7 +137,26 @@ for scene in "$examples/composite.json" "$examples/spheres3d.json"; do
     cmp -s "$dir/threads.json" "$dir/pieces.json" || fail "$name: --threads 3 and 1 give different certificates"
   done
 
+  # One Gmsh file from the partitions' chunks: the sequential run's .msh (cells with their
+  # physical groups, boundary facets per face, group names) through meshio, gmsh reads it
+  # without error, certify gives the sequential certificate; no spool or chunk left.
+  "$cisamr" mesh "$scene" -o "$dir/$name-seq.msh" -q || fail "$name: sequential .msh"
+  "$cisamr" mesh "$scene" -o "$dir/$name-s.msh" --stream --partitions 7 --report "$dir/$name-sm.json" -q ||
+    fail "$name: --stream .msh"
+  [ "$(checksum "$dir/$name-sm.json")" = "$ref" ] || fail "$name: --stream .msh checksum differs"
+  ls -a "$dir" | grep -q "spool\|chunk" && fail "$name: a spool or chunk was left behind"
+  same_msh "$dir/$name-s.msh" "$dir/$name-seq.msh" || fail "$name: the streamed .msh is not the sequential one"
+  gmsh -check "$dir/$name-s.msh" > "$dir/gmsh.log" 2>&1 && ! grep -q Error "$dir/gmsh.log" ||
+    fail "$name: gmsh -check: $(grep Error "$dir/gmsh.log" | head -2)"
+  certificate "$dir/$name-s.msh" > "$dir/cert-sm.txt"
+  diff "$dir/cert-sm.txt" "$dir/cert-seq.txt" || fail "$name: the streamed .msh certificate differs"
+
   if [ -n "$mpiexec" ]; then
+    run_mpi 3 "$cisamr" mesh "$scene" -o "$dir/$name-3.msh" --stream --partitions 7 --report "$dir/$name-3m.json" -q ||
+      fail "$name: 3 ranks --stream .msh"
+    [ "$(checksum "$dir/$name-3m.json")" = "$ref" ] || fail "$name: 3 ranks --stream .msh checksum differs"
+    same_msh "$dir/$name-3.msh" "$dir/$name-seq.msh" || fail "$name: 3 ranks stream another .msh"
+    ls -a "$dir" | grep -q "spool\|chunk" && fail "$name: a spool or chunk was left behind (3 ranks)"
     run_mpi 3 "$cisamr" mesh "$scene" -o "$dir/$name-3.pvtu" --stream --partitions 7 --report "$dir/$name-3.json" -q ||
       fail "$name: 3 ranks --stream"
     [ "$(checksum "$dir/$name-3.json")" = "$ref" ] || fail "$name: 3 ranks --stream checksum differs"
@@ -163,6 +205,13 @@ EOF
 grep -q "streamed over [0-9]* partitions" "$dir/auto.err" || fail "automatic stream: no note ($(cat "$dir/auto.err"))"
 [ "$(checksum "$dir/auto.json")" = "$(checksum "$dir/composite-seq.json")" ] || fail "automatic stream: checksum differs"
 [ "$(ls "$dir" | grep -c '^auto_[0-9]*\.vtu$')" -ge 8 ] || fail "automatic stream: fewer than 8 pieces"
+if [ -n "$mpiexec" ]; then  # one .msh of a parallel run (--gather) beyond memory: streamed as well
+  run_mpi 2 "$cisamr" mesh "$examples/composite.json" -o "$dir/auto.msh" --gather --max-elements 20000 \
+    --report "$dir/auto-msh.json" > /dev/null 2> "$dir/auto-msh.err" || fail "automatic .msh stream: $(cat "$dir/auto-msh.err")"
+  grep -q "streamed over [0-9]* partitions" "$dir/auto-msh.err" || fail "automatic .msh stream: no note"
+  [ "$(checksum "$dir/auto-msh.json")" = "$(checksum "$dir/composite-seq.json")" ] || fail "automatic .msh stream: checksum"
+  same_msh "$dir/auto.msh" "$dir/composite-seq.msh" || fail "automatic .msh stream: not the sequential .msh"
+fi
 
 # Refused before any work: exit 2, one line naming the option or field, nothing written.
 refused() {  # refused WHAT ARGS...
@@ -178,7 +227,7 @@ refused() {  # refused WHAT ARGS...
 }
 mkdir -p "$dir/bad"
 refused "--gather" "$examples/composite.json" -o "$dir/bad/x.pvtu" --stream --gather
-refused "not .pvtu" "$examples/composite.json" -o "$dir/bad/x.msh" --stream
+refused "not .pvtu or .msh" "$examples/composite.json" -o "$dir/bad/x.inp" --stream
 refused "--svg" "$examples/composite.json" -o "$dir/bad/x.pvtu" --stream --svg "$dir/bad/x.svg"
 refused "--cohesive" "$examples/composite.json" -o "$dir/bad/x.pvtu" --stream --cohesive
 refused "periodic" "$examples/rve3d.json" -o "$dir/bad/x.pvtu" --stream
