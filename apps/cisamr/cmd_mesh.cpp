@@ -47,9 +47,11 @@ void check_explode(const MeshArgs& args, const driver::Output& output) {
 
 constexpr int kStreamedPartitionsPerRank = 8;
 
-// Whether --stream writes one Gmsh file (else .pvtu pieces).
-bool streams_msh(const MeshArgs& args) {
-  return args.format.empty() ? std::filesystem::path(args.output).extension() == ".msh" : args.format == "msh";
+// Whether --stream writes one Gmsh or Abaqus file (else .pvtu pieces).
+bool streams_one_file(const MeshArgs& args) {
+  const std::string format =
+      args.format.empty() ? std::filesystem::path(args.output).extension().string() : "." + args.format;
+  return format == ".msh" || format == ".inp";
 }
 
 // --stream writes .pvtu pieces, or one .msh from chunks, as partitions finish: no picture of
@@ -59,8 +61,10 @@ void check_stream(const MeshArgs& args) {
   if (!args.svg.empty())
     throw InputError("--stream", "", "--svg draws the whole mesh, which a streamed run never holds; drop one of them");
   const std::string extension = std::filesystem::path(args.output).extension().string();
-  if (!streams_msh(args) && (!args.format.empty() || extension != ".pvtu"))
-    throw InputError(args.output, "", "--stream writes .pvtu pieces or one Gmsh .msh: name the output NAME.pvtu or NAME.msh");
+  if (!streams_one_file(args) && (!args.format.empty() || extension != ".pvtu"))
+    throw InputError(args.output, "",
+                     "--stream writes .pvtu pieces or one .msh or .inp file: name the output NAME.pvtu, NAME.msh "
+                     "or NAME.inp");
 }
 
 void run_mesh(MeshArgs& args, const GlobalFlags& flags, int& exit_code) {
@@ -88,14 +92,16 @@ void run_mesh(MeshArgs& args, const GlobalFlags& flags, int& exit_code) {
     if (options.partitions == 0) options.partitions = kStreamedPartitionsPerRank * comm.size();
   }
   // Fail on a bad output name before any work.
-  // A streamed .msh is one file, written on rank 0 from every partition's chunks (as --gather's).
+  // A streamed .msh or .inp is one file, written on rank 0 from every partition's chunks (as --gather's).
   driver::Output output =
-      driver::plan_output(comm, args.output, args.gather || (args.stream && streams_msh(args)),
+      driver::plan_output(comm, args.output, args.gather || (args.stream && streams_one_file(args)),
                           driver::is_distributed(comm, options), args.format,
                           args.plane == "strain" ? io::PlaneKind::strain : io::PlaneKind::stress);
+  options.stream_format = output.format;
+  options.stream_plane = output.plane;
   if (args.stream) options.stream = output.path;
-  // Pieces, or one .msh of a parallel run (--gather): streamed when the mesh would not fit.
-  else if ((output.pieces || (args.gather && streams_msh(args) && driver::is_distributed(comm, options))) &&
+  // Pieces, or one .msh or .inp of a parallel run (--gather): streamed when the mesh would not fit.
+  else if ((output.pieces || (args.gather && streams_one_file(args) && driver::is_distributed(comm, options))) &&
            args.svg.empty())
     options.stream_if_needed = output.path;
   if (options.pipeline.cohesive)
@@ -191,7 +197,7 @@ void add_mesh_command(CLI::App& app, GlobalFlags& flags, int& exit_code) {
   cmd->add_flag("--stream", args->stream,
                 "Write the mesh while meshing, partition by partition, holding one partition per rank at a time "
                 "(default --partitions: 8 per rank): .pvtu (one piece per partition, global node ids) or one Gmsh "
-                ".msh (each partition's nodes and elements written as it is done, joined on rank 0)");
+                ".msh or Abaqus .inp (each partition's nodes and elements written as it is done, joined on rank 0)");
   cmd->add_flag("--gather", args->gather,
                 "Parallel run: write one file on rank 0 (any format) instead of .pvtu pieces");
   cmd->add_flag("--fixed-ghost", args->fixed_ghost,

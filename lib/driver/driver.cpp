@@ -288,6 +288,8 @@ std::variant<MeshRun<2>, MeshRun<3>> mesh_scene(const Comm& comm, const std::str
           run.streamed = true;
           run.aspect.bound = run.bound;
           io::MeshWriteOptions write;
+          write.format = options.stream_format;
+          write.plane = options.stream_plane;
           write.face_box = Box3{};
           for (int d = 0; d < Dim; ++d) write.face_box->min[d] = run.face_box.min[d], write.face_box->max[d] = run.face_box.max[d];
           const std::vector<geometry::Phase> phases = scene.phases;

@@ -25,12 +25,17 @@ struct Options {
   // 0: the sequential mesher on one process, one partition per rank on several; N: the
   // parallel mesher over N partitions (N ≥ ranks).
   int partitions = 0;
-  // --stream: the .pvtu to write while meshing (parallel/stream.hpp), partitions one after
-  // another on each rank; empty: the mesh is assembled in memory and written after.
+  // --stream: the .pvtu (or one .msh or .inp) to write while meshing (parallel/stream.hpp),
+  // partitions one after another on each rank; empty: the mesh is assembled in memory and
+  // written after.
   std::string stream;
-  // The .pvtu a parallel run writes when it is asked for pieces: the mesh is streamed there
-  // when its estimate would not fit in memory (and it can be streamed), instead of refused.
+  // The .pvtu a parallel run writes when it is asked for pieces (or its --gather .msh or
+  // .inp): the mesh is streamed there when its estimate would not fit in memory (and it can
+  // be streamed), instead of refused.
   std::string stream_if_needed;
+  // The streamed file's format when its name does not say it, and the 2D Abaqus element type.
+  std::optional<io::MeshFormat> stream_format;
+  io::PlaneKind stream_plane = io::PlaneKind::stress;
   parallel::GhostRule ghost;
   double bound = 0;     // aspect-ratio bound of the statistics (0: 3 in 2D, 5 in 3D)
   bool figures = true;  // per-phase counts and measures, checksum (a pass and a sort over the cells)

@@ -15,6 +15,7 @@
 #include "core/error.hpp"
 #include "io/atomic_file.hpp"
 #include "io/mesh_io.hpp"
+#include "io/inp_stream.hpp"
 #include "io/msh_stream.hpp"
 #include "mesh/boundary.hpp"
 #include "mesh/cohesive.hpp"
@@ -881,6 +882,42 @@ struct AbaqusFaceOf<3> {
 // Abaqus input rules: at most 16 entries per data line, numbers of at most 20 characters.
 constexpr int kAbaqusNumberWidth = 20;
 
+std::string inp_heading(std::uint64_t nodes, std::uint64_t cells, int dim) {
+  return "*HEADING\ncisamr mesh: " + std::to_string(nodes) + " nodes, " + std::to_string(cells) +
+         (dim == 2 ? " triangles\n" : " tetrahedra\n");
+}
+
+// A phase's element block head; our reader takes the phase id and full name from the
+// comment, Abaqus ignores it.
+std::string inp_element_header(const std::vector<geometry::Phase>& phases, int id, const char* element_type) {
+  std::string name = phase_name(phases, id);
+  std::replace(name.begin(), name.end(), '\n', ' ');
+  return "** cisamr phase " + std::to_string(id) + " " + name + "\n*ELEMENT, TYPE=" + element_type +
+         ", ELSET=" + abaqus_label(name) + "\n";
+}
+
+std::string inp_nset_header(int face) {
+  return "*NSET, NSET=" + std::string(mesh::kBoxFaceNames[static_cast<std::size_t>(face)]) + "\n";
+}
+std::string inp_elset_header(int face, int side) {
+  return "*ELSET, ELSET=" + std::string(mesh::kBoxFaceNames[static_cast<std::size_t>(face)]) + "_S" +
+         std::to_string(side) + "\n";
+}
+// Per face, *SURFACE <FACE>_FACES listing its ELSETs <FACE>_S<k> (the Abaqus face ids used).
+std::string inp_surface(int face, const std::vector<int>& sides) {
+  const std::string name(mesh::kBoxFaceNames[static_cast<std::size_t>(face)]);
+  std::string text = "*SURFACE, TYPE=ELEMENT, NAME=" + name + "_FACES\n";
+  for (int k : sides) text += name + "_S" + std::to_string(k) + ", S" + std::to_string(k) + "\n";
+  return text;
+}
+
+// One element line: tag, then its nodes' numbers (global id + 1 when ids are given).
+void write_inp_element(TextWriter& out, std::uint64_t tag, const LocalId* corners, int count, const GlobalId* ids) {
+  out.integer(static_cast<long long>(tag));
+  for (int k = 0; k < count; ++k) out << ", ", out.integer((ids ? ids[corners[k]] : static_cast<GlobalId>(corners[k])) + 1LL);
+  out << '\n';
+}
+
 // Abaqus data lines hold at most 16 entries.
 void write_id_lines(TextWriter& out, const std::vector<long long>& ids) {
   for (std::size_t i = 0; i < ids.size(); ++i) {
@@ -974,9 +1011,7 @@ void write_inp_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m,
   const PeriodicOutput<Dim> periodic = periodic_output(m, options);  // throws before any output
   const std::array<long long, Dim> ref = reference_nodes(m, periodic);
   TextWriter out(file);
-  out << "*HEADING\ncisamr mesh: ";
-  out.integer(static_cast<long long>(nodes)) << " nodes, ";
-  out.integer(static_cast<long long>(cells)) << (Dim == 2 ? " triangles\n" : " tetrahedra\n");
+  out << inp_heading(nodes, cells, Dim);
   if (periodic.any) {
     out << "** cisamr periodic reference nodes";
     for (long long id : ref)
@@ -996,19 +1031,9 @@ void write_inp_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m,
     out << '\n';
   }
   for (std::size_t g = 0; g < groups.ids.size(); ++g) {
-    std::string name = phase_name(phases, groups.ids[g]);
-    std::replace(name.begin(), name.end(), '\n', ' ');
-    // Our reader takes the phase id and full name from this comment; Abaqus ignores it.
-    out << "** cisamr phase ";
-    out.integer(groups.ids[g]) << ' ' << name << '\n';
-    out << "*ELEMENT, TYPE=" << element_type << ", ELSET=" << abaqus_label(name) << '\n';
-    for (std::size_t i = groups.begin[g]; i < groups.begin[g + 1]; ++i) {
-      const std::size_t c = groups.order[i];
-      out.integer(static_cast<long long>(c + 1));
-      const LocalId* corners = m.cell(c);
-      for (int k = 0; k < kCorners; ++k) out << ", ", out.integer(corners[k] + 1LL);
-      out << '\n';
-    }
+    out << inp_element_header(phases, groups.ids[g], element_type);
+    for (std::size_t i = groups.begin[g]; i < groups.begin[g + 1]; ++i)
+      write_inp_element(out, groups.order[i] + 1, m.cell(groups.order[i]), kCorners, nullptr);
   }
   write_inp_cohesive(out, m, phases);
 
@@ -1020,7 +1045,7 @@ void write_inp_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m,
     for (std::size_t n = 0; n < nodes; ++n)
       if ((sets.node_faces[n] >> f) & 1) ids.push_back(static_cast<long long>(n + 1));
     if (ids.empty()) continue;
-    out << "*NSET, NSET=" << mesh::kBoxFaceNames[static_cast<std::size_t>(f)] << '\n';
+    out << inp_nset_header(f);
     write_id_lines(out, ids);
   }
   if (sets.corner0 >= 0) {
@@ -1040,20 +1065,101 @@ void write_inp_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m,
         if (AbaqusFaceOf<Dim>::id[facet.opposite] == k) ids.push_back(facet.cell + 1);
       if (ids.empty()) continue;
       used.push_back(k);
-      out << "*ELSET, ELSET=" << face << "_S";
-      out.integer(k) << '\n';
+      out << inp_elset_header(f, k);
       write_id_lines(out, ids);
     }
-    out << "*SURFACE, TYPE=ELEMENT, NAME=" << face << "_FACES\n";
-    for (int k : used) {
-      out << face << "_S";
-      out.integer(k) << ", S";
-      out.integer(k) << '\n';
-    }
+    out << inp_surface(f, used);
   }
   if (periodic.any) write_inp_constraints(out, m, periodic);
   out.flush();
 }
+
+// ---- streamed (inp_stream.hpp) ----
+
+}  // namespace
+
+std::string inp_stream_head(std::uint64_t nodes, std::uint64_t cells, int dim) {
+  return inp_heading(nodes, cells, dim) + "*NODE\n";
+}
+
+std::string inp_stream_element_header(const std::vector<geometry::Phase>& phases, int id, int dim, PlaneKind plane) {
+  return inp_element_header(phases, id, dim == 3 ? "C3D4" : plane == PlaneKind::strain ? "CPE3" : "CPS3");
+}
+std::string inp_stream_nset_header(int face) { return inp_nset_header(face); }
+std::string inp_stream_elset_header(int face, int side) { return inp_elset_header(face, side); }
+std::string inp_stream_surface(int face, const std::vector<int>& sides) { return inp_surface(face, sides); }
+
+template <int Dim>
+void write_inp_node_chunk(AtomicFile& file, const mesh::SimplexMesh<Dim>& m, GlobalId first_owned, std::uint64_t owned) {
+  TextWriter out(file);
+  const GlobalId end = first_owned + static_cast<GlobalId>(owned);
+  for (std::size_t n = 0; n < m.node_count(); ++n) {
+    const GlobalId id = m.node_global_id[n];
+    if (id < first_owned || id >= end) continue;
+    out.integer(id + 1LL);
+    for (int d = 0; d < Dim; ++d) out << ", ", out.real_within(m.coords[n * Dim + d], kAbaqusNumberWidth);
+    out << '\n';
+  }
+  out.flush();
+}
+
+template <int Dim>
+void write_inp_cell_chunks(const std::vector<AtomicFile*>& per_phase, const std::vector<int>& phase_ids,
+                           const mesh::SimplexMesh<Dim>& m, std::uint64_t first_cell_tag) {
+  const PhaseGroups groups = group_by_phase(m.cell_phase);
+  for (std::size_t g = 0; g < groups.ids.size(); ++g) {
+    const auto at = std::find(phase_ids.begin(), phase_ids.end(), groups.ids[g]);
+    if (at == phase_ids.end()) throw std::logic_error("write_inp_cell_chunks: a phase missing from the list");
+    TextWriter out(*per_phase[static_cast<std::size_t>(at - phase_ids.begin())]);
+    for (std::size_t i = groups.begin[g]; i < groups.begin[g + 1]; ++i)
+      write_inp_element(out, first_cell_tag + groups.order[i] + 1, m.cell(groups.order[i]), Dim + 1, m.node_global_id.data());
+    out.flush();
+  }
+}
+
+template <int Dim>
+GlobalId write_inp_set_chunks(const std::array<AtomicFile*, 6>& nsets,
+                              const std::array<std::array<AtomicFile*, 4>, 6>& elsets, const mesh::SimplexMesh<Dim>& m,
+                              const MeshWriteOptions& options, GlobalId first_owned, std::uint64_t owned,
+                              std::uint64_t first_cell_tag) {
+  const mesh::BoundarySets<Dim> sets = boundary_sets_for(m, options);
+  const GlobalId end = first_owned + static_cast<GlobalId>(owned);
+  const auto is_owned = [&](std::size_t n) { return m.node_global_id[n] >= first_owned && m.node_global_id[n] < end; };
+  std::vector<long long> ids;
+  for (int f = 0; f < mesh::box_face_count(Dim); ++f) {
+    ids.clear();
+    for (std::size_t n = 0; n < m.node_count(); ++n)
+      if (((sets.node_faces[n] >> f) & 1) && is_owned(n)) ids.push_back(m.node_global_id[n] + 1LL);
+    TextWriter out(*nsets[static_cast<std::size_t>(f)]);
+    write_id_lines(out, ids);
+    out.flush();
+    for (int k = 1; k <= Dim + 1; ++k) {
+      ids.clear();
+      for (const mesh::CellFacet& facet : sets.facets[static_cast<std::size_t>(f)])
+        if (AbaqusFaceOf<Dim>::id[facet.opposite] == k) ids.push_back(static_cast<long long>(first_cell_tag) + facet.cell + 1);
+      TextWriter side(*elsets[static_cast<std::size_t>(f)][static_cast<std::size_t>(k - 1)]);
+      write_id_lines(side, ids);
+      side.flush();
+    }
+  }
+  return sets.corner0 >= 0 && is_owned(static_cast<std::size_t>(sets.corner0))
+             ? m.node_global_id[static_cast<std::size_t>(sets.corner0)]
+             : -1;
+}
+
+#define CISAMR_INP_STREAM(D)                                                                                        \
+  template void write_inp_node_chunk<D>(AtomicFile&, const mesh::SimplexMesh<D>&, GlobalId, std::uint64_t);         \
+  template void write_inp_cell_chunks<D>(const std::vector<AtomicFile*>&, const std::vector<int>&,                  \
+                                         const mesh::SimplexMesh<D>&, std::uint64_t);                               \
+  template GlobalId write_inp_set_chunks<D>(const std::array<AtomicFile*, 6>&,                                      \
+                                            const std::array<std::array<AtomicFile*, 4>, 6>&,                       \
+                                            const mesh::SimplexMesh<D>&, const MeshWriteOptions&, GlobalId,         \
+                                            std::uint64_t, std::uint64_t);
+CISAMR_INP_STREAM(2)
+CISAMR_INP_STREAM(3)
+#undef CISAMR_INP_STREAM
+
+namespace {
 
 // ------------------------------------------------------------------------------ Medit
 

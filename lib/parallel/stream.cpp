@@ -1,6 +1,8 @@
 #include "parallel/stream.hpp"
 
+#include <algorithm>
 #include <array>
+#include <optional>
 #include <filesystem>
 #include <fstream>
 #include <memory>
@@ -8,6 +10,7 @@
 
 #include "core/error.hpp"
 #include "io/atomic_file.hpp"
+#include "io/inp_stream.hpp"
 #include "io/msh_stream.hpp"
 #include "parallel/exchange.hpp"
 #include "parallel/collective.hpp"
@@ -57,19 +60,27 @@ mesh::SimplexMesh<Dim> unspool(const io::AtomicFile& file) {
   return m;
 }
 
-// A partition's chunks of the streamed .msh (io/msh_stream.hpp): hidden temporaries beside
-// the output, never committed (gone with the run, or when a signal ends it).
-struct MshChunks {
+// A partition's chunks of a streamed one-file output (.msh, .inp), in the order its joiner
+// reads them: hidden temporaries beside the output, never committed (gone with the run, or
+// when a signal ends it); and the min corner node's global id when the partition owns it.
+struct PartitionChunks {
   int partition = 0;
-  std::unique_ptr<io::AtomicFile> nodes, cells;
-  std::array<std::unique_ptr<io::AtomicFile>, 6> faces;  // 2·Dim used
+  std::vector<std::unique_ptr<io::AtomicFile>> files;
+  GlobalId corner0 = -1;
+  io::AtomicFile& add(const std::string& path, const std::string& what) {
+    const fs::path p(path);
+    files.push_back(std::make_unique<io::AtomicFile>(
+        (p.parent_path() / ("." + p.stem().string() + "." + std::to_string(partition) + "." + what + ".chunk")).string()));
+    return *files.back();
+  }
 };
 
-std::unique_ptr<io::AtomicFile> chunk_file(const std::string& path, int partition, const std::string& what) {
-  const fs::path p(path);
-  return std::make_unique<io::AtomicFile>(
-      (p.parent_path() / ("." + p.stem().string() + "." + std::to_string(partition) + "." + what + ".chunk")).string());
-}
+// What rank 0 reads of a partition's chunks.
+struct ChunkList {
+  std::vector<std::string> paths;
+  std::vector<std::uint64_t> bytes;
+  GlobalId corner0 = -1;
+};
 
 // Appends the bytes of `from` (a chunk another rank may have written: the output's folder is
 // shared, as the pieces' and spools' are).
@@ -83,15 +94,16 @@ void append_file(io::AtomicFile& to, const std::string& from) {
   if (in.bad()) throw std::runtime_error("cannot read back the chunk " + from);
 }
 
-// The .msh of a streamed run: every partition's summary to every rank, chunks written where
-// the partitions are, then rank 0 writes the head and the chunks in order.
-template <int Dim>
-void write_streamed_msh(const Comm& comm, const std::string& path, const std::vector<PartitionFaces<Dim>>& faces,
-                        const StreamNumbering<Dim>& numbering, std::vector<std::unique_ptr<io::AtomicFile>>& spools,
-                        std::vector<io::MshPartSummary>& summaries, int partitions,
-                        const std::vector<geometry::Phase>& phases, const io::MeshWriteOptions& write_options,
-                        const std::function<void(const mesh::SimplexMesh<Dim>&)>& on_partition) {
-  constexpr std::size_t kFaces = static_cast<std::size_t>(2 * Dim);
+// A one-file output from chunks: every partition's summary (owned counts from the
+// numbering) to every rank; each partition read back, numbered and written as chunks by
+// `write_chunks(mesh, local index, summaries, chunks)`; rank 0 opens the output and
+// `join(file, summaries, chunk lists by partition)`.
+template <int Dim, class WriteChunks, class Join>
+void write_streamed_file(const Comm& comm, const std::string& path, const std::vector<PartitionFaces<Dim>>& faces,
+                         const StreamNumbering<Dim>& numbering, std::vector<std::unique_ptr<io::AtomicFile>>& spools,
+                         std::vector<io::MshPartSummary>& summaries, int partitions,
+                         const std::function<void(const mesh::SimplexMesh<Dim>&)>& on_partition,
+                         WriteChunks&& write_chunks, Join&& join) {
   Packer mine;
   for (std::size_t k = 0; k < faces.size(); ++k) {
     std::uint64_t copies = 0;  // face nodes owned by a lower partition
@@ -114,70 +126,167 @@ void write_streamed_msh(const Comm& comm, const std::string& path, const std::ve
       s.faces = u.get<std::array<io::MshGroup, 6>>();
     }
   }
-  // Tags: cells by partition, then the facets face by face, partition by partition.
-  std::vector<std::uint64_t> first_cell(all.size() + 1, 0);
-  for (std::size_t p = 0; p < all.size(); ++p) first_cell[p + 1] = first_cell[p] + all[p].cells;
-  std::vector<std::array<std::uint64_t, 6>> first_facet(all.size());
-  std::uint64_t tag = first_cell.back();
-  for (std::size_t f = 0; f < kFaces; ++f)
-    for (std::size_t p = 0; p < all.size(); ++p) first_facet[p][f] = tag, tag += all[p].faces[f].count;
-  const int node_entity = io::msh_node_entity(all);
-
-  std::vector<MshChunks> chunks;
+  std::vector<PartitionChunks> chunks;
   run_collectively(comm, [&] {
     for (std::size_t k = 0; k < faces.size(); ++k) {
       mesh::SimplexMesh<Dim> m = unspool<Dim>(*spools[k]);
       spools[k].reset();
-      const int p = faces[k].partition;
       m.node_global_id = global_ids_of<Dim>(faces[k], numbering.offset[k], numbering.face_ids[k]);
-      m.cell_partition.assign(m.cell_phase.size(), p);
+      m.cell_partition.assign(m.cell_phase.size(), faces[k].partition);
       if (on_partition) on_partition(m);
-      MshChunks c;
-      c.partition = p;
-      c.nodes = chunk_file(path, p, "nodes");
-      io::write_msh_node_chunk<Dim>(*c.nodes, m, numbering.offset[k], summaries[k].owned_nodes, node_entity);
-      c.cells = chunk_file(path, p, "cells");
-      io::write_msh_cell_chunk<Dim>(*c.cells, m, first_cell[static_cast<std::size_t>(p)]);
-      std::array<io::AtomicFile*, 6> face_files{};
-      for (std::size_t f = 0; f < kFaces; ++f) {
-        c.faces[f] = chunk_file(path, p, "face" + std::to_string(f));
-        face_files[f] = c.faces[f].get();
-      }
-      io::write_msh_face_chunks<Dim>(face_files, m, write_options, first_facet[static_cast<std::size_t>(p)]);
-      c.nodes->flush();
-      c.cells->flush();
-      for (std::size_t f = 0; f < kFaces; ++f) c.faces[f]->flush();
+      PartitionChunks c;
+      c.partition = faces[k].partition;
+      write_chunks(m, k, all, c);
+      for (auto& f : c.files) f->flush();
       chunks.push_back(std::move(c));
     }
   });
-  Packer paths;
-  for (const MshChunks& c : chunks) {
-    paths.put<std::int32_t>(c.partition);
-    paths.put_string(c.nodes->temporary_path());
-    paths.put_string(c.cells->temporary_path());
-    for (std::size_t f = 0; f < kFaces; ++f) paths.put_string(c.faces[f]->temporary_path());
+  Packer lists;
+  for (const PartitionChunks& c : chunks) {
+    lists.put<std::int32_t>(c.partition);
+    lists.put<GlobalId>(c.corner0);
+    lists.put<std::uint64_t>(c.files.size());
+    for (const auto& f : c.files) {
+      lists.put_string(f->temporary_path());
+      lists.put<std::uint64_t>(fs::file_size(f->temporary_path()));
+    }
   }
-  const std::vector<Bytes> gathered = allgather_bytes(comm, paths.bytes());
+  const std::vector<Bytes> gathered = allgather_bytes(comm, lists.bytes());
   run_collectively(comm, [&] {
     if (comm.rank() != 0) return;
-    std::vector<std::vector<std::string>> chunk_paths(all.size());  // per partition: nodes, cells, faces
+    std::vector<ChunkList> by_partition(all.size());
     for (const Bytes& bytes : gathered) {
       Unpacker u(bytes);
       while (!u.done()) {
-        std::vector<std::string>& c = chunk_paths.at(static_cast<std::size_t>(u.get<std::int32_t>()));
-        for (std::size_t i = 0; i < 2 + kFaces; ++i) c.push_back(u.get_string());
+        ChunkList& c = by_partition.at(static_cast<std::size_t>(u.get<std::int32_t>()));
+        c.corner0 = u.get<GlobalId>();
+        for (auto n = u.get<std::uint64_t>(); n > 0; --n) {
+          c.paths.push_back(u.get_string());
+          c.bytes.push_back(u.get<std::uint64_t>());
+        }
       }
     }
     io::AtomicFile file(path);
-    io::write_msh_head<Dim>(file, all, phases);
-    for (const auto& c : chunk_paths) append_file(file, c[0]);
-    io::write_msh_elements_head(file, all);
-    for (const auto& c : chunk_paths) append_file(file, c[1]);
-    for (std::size_t f = 0; f < kFaces; ++f)
-      for (const auto& c : chunk_paths) append_file(file, c[2 + f]);
-    io::write_msh_tail(file);
+    join(file, all, by_partition);
     file.commit();
   });
+}
+
+// Gmsh: chunks nodes, cells, then one per box face (io/msh_stream.hpp).
+template <int Dim>
+void write_streamed_msh(const Comm& comm, const std::string& path, const std::vector<PartitionFaces<Dim>>& faces,
+                        const StreamNumbering<Dim>& numbering, std::vector<std::unique_ptr<io::AtomicFile>>& spools,
+                        std::vector<io::MshPartSummary>& summaries, int partitions,
+                        const std::vector<geometry::Phase>& phases, const io::MeshWriteOptions& write_options,
+                        const std::function<void(const mesh::SimplexMesh<Dim>&)>& on_partition) {
+  constexpr std::size_t kFaces = static_cast<std::size_t>(2 * Dim);
+  // Tags: cells by partition, then the facets face by face, partition by partition.
+  const auto first_cells = [](const std::vector<io::MshPartSummary>& all) {
+    std::vector<std::uint64_t> first(all.size() + 1, 0);
+    for (std::size_t p = 0; p < all.size(); ++p) first[p + 1] = first[p] + all[p].cells;
+    return first;
+  };
+  write_streamed_file<Dim>(
+      comm, path, faces, numbering, spools, summaries, partitions, on_partition,
+      [&](const mesh::SimplexMesh<Dim>& m, std::size_t k, const std::vector<io::MshPartSummary>& all, PartitionChunks& c) {
+        const auto p = static_cast<std::size_t>(c.partition);
+        std::array<std::uint64_t, 6> first_facet{};
+        std::uint64_t tag = first_cells(all).back();
+        for (std::size_t f = 0; f < kFaces; ++f)
+          for (std::size_t q = 0; q < all.size(); ++q) {
+            if (q == p) first_facet[f] = tag;
+            tag += all[q].faces[f].count;
+          }
+        io::write_msh_node_chunk<Dim>(c.add(path, "nodes"), m, numbering.offset[k], summaries[k].owned_nodes,
+                                      io::msh_node_entity(all));
+        io::write_msh_cell_chunk<Dim>(c.add(path, "cells"), m, first_cells(all)[p]);
+        std::array<io::AtomicFile*, 6> face_files{};
+        for (std::size_t f = 0; f < kFaces; ++f) face_files[f] = &c.add(path, "face" + std::to_string(f));
+        io::write_msh_face_chunks<Dim>(face_files, m, write_options, first_facet);
+      },
+      [&](io::AtomicFile& file, const std::vector<io::MshPartSummary>& all, const std::vector<ChunkList>& chunks) {
+        io::write_msh_head<Dim>(file, all, phases);
+        for (const ChunkList& c : chunks) append_file(file, c.paths[0]);
+        io::write_msh_elements_head(file, all);
+        for (const ChunkList& c : chunks) append_file(file, c.paths[1]);
+        for (std::size_t f = 0; f < kFaces; ++f)
+          for (const ChunkList& c : chunks) append_file(file, c.paths[2 + f]);
+        io::write_msh_tail(file);
+      });
+}
+
+// Abaqus: chunks nodes, cells per phase (every phase of any partition), then per box face
+// its node set and its Dim + 1 element sides (io/inp_stream.hpp).
+template <int Dim>
+void write_streamed_inp(const Comm& comm, const std::string& path, const std::vector<PartitionFaces<Dim>>& faces,
+                        const StreamNumbering<Dim>& numbering, std::vector<std::unique_ptr<io::AtomicFile>>& spools,
+                        std::vector<io::MshPartSummary>& summaries, int partitions,
+                        const std::vector<geometry::Phase>& phases, const io::MeshWriteOptions& write_options,
+                        const std::function<void(const mesh::SimplexMesh<Dim>&)>& on_partition) {
+  constexpr int kFaces = 2 * Dim, kSides = Dim + 1;
+  const auto phase_ids = [](const std::vector<io::MshPartSummary>& all) {
+    std::vector<int> ids;
+    for (const io::MshPartSummary& s : all)
+      for (const io::MshGroup& g : s.phases) ids.push_back(g.id);
+    std::sort(ids.begin(), ids.end());
+    ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
+    return ids;
+  };
+  write_streamed_file<Dim>(
+      comm, path, faces, numbering, spools, summaries, partitions, on_partition,
+      [&](const mesh::SimplexMesh<Dim>& m, std::size_t k, const std::vector<io::MshPartSummary>& all, PartitionChunks& c) {
+        std::uint64_t first_cell = 0;
+        for (int q = 0; q < c.partition; ++q) first_cell += all[static_cast<std::size_t>(q)].cells;
+        io::write_inp_node_chunk<Dim>(c.add(path, "nodes"), m, numbering.offset[k], summaries[k].owned_nodes);
+        const std::vector<int> ids = phase_ids(all);
+        std::vector<io::AtomicFile*> per_phase;
+        for (int id : ids) per_phase.push_back(&c.add(path, "phase" + std::to_string(id)));
+        io::write_inp_cell_chunks<Dim>(per_phase, ids, m, first_cell);
+        std::array<io::AtomicFile*, 6> nsets{};
+        std::array<std::array<io::AtomicFile*, 4>, 6> elsets{};
+        for (int f = 0; f < kFaces; ++f) {
+          nsets[static_cast<std::size_t>(f)] = &c.add(path, "nset" + std::to_string(f));
+          for (int s = 0; s < kSides; ++s)
+            elsets[static_cast<std::size_t>(f)][static_cast<std::size_t>(s)] =
+                &c.add(path, "elset" + std::to_string(f) + "s" + std::to_string(s + 1));
+        }
+        c.corner0 = io::write_inp_set_chunks<Dim>(nsets, elsets, m, write_options, numbering.offset[k],
+                                                  summaries[k].owned_nodes, first_cell);
+      },
+      [&](io::AtomicFile& file, const std::vector<io::MshPartSummary>& all, const std::vector<ChunkList>& chunks) {
+        std::uint64_t nodes = 0, cells = 0;
+        for (const io::MshPartSummary& s : all) nodes += s.owned_nodes, cells += s.cells;
+        file.write(io::inp_stream_head(nodes, cells, Dim));
+        for (const ChunkList& c : chunks) append_file(file, c.paths[0]);
+        const std::vector<int> ids = phase_ids(all);
+        for (std::size_t g = 0; g < ids.size(); ++g) {
+          file.write(io::inp_stream_element_header(phases, ids[g], Dim, write_options.plane));
+          for (const ChunkList& c : chunks) append_file(file, c.paths[1 + g]);
+        }
+        const std::size_t sets = 1 + ids.size();  // the first set chunk
+        const auto any_lines = [&](std::size_t i) {
+          return std::any_of(chunks.begin(), chunks.end(), [&](const ChunkList& c) { return c.bytes[i] > 0; });
+        };
+        for (int f = 0; f < kFaces; ++f) {
+          const std::size_t nset = sets + static_cast<std::size_t>(f) * (1 + kSides);
+          if (!any_lines(nset)) continue;
+          file.write(io::inp_stream_nset_header(f));
+          for (const ChunkList& c : chunks) append_file(file, c.paths[nset]);
+        }
+        for (const ChunkList& c : chunks)
+          if (c.corner0 >= 0) file.write("*NSET, NSET=CORNER0\n" + std::to_string(c.corner0 + 1) + "\n");
+        for (int f = 0; f < kFaces; ++f) {
+          std::vector<int> used;
+          for (int s = 1; s <= kSides; ++s) {
+            const std::size_t elset = sets + static_cast<std::size_t>(f) * (1 + kSides) + static_cast<std::size_t>(s);
+            if (!any_lines(elset)) continue;
+            used.push_back(s);
+            file.write(io::inp_stream_elset_header(f, s));
+            for (const ChunkList& c : chunks) append_file(file, c.paths[elset]);
+          }
+          if (!used.empty()) file.write(io::inp_stream_surface(f, used));
+        }
+      });
 }
 
 }  // namespace
@@ -197,11 +306,15 @@ template <int Dim>
 DistributedMesh<Dim> mesh_streamed(const Comm& comm, geometry::SceneDesc scene, const MeshOptions& options,
                                    const std::string& pvtu_path, const io::MeshWriteOptions& write_options,
                                    const std::function<void(const mesh::SimplexMesh<Dim>&)>& on_partition) {
-  const bool msh = write_options.format ? *write_options.format == io::MeshFormat::msh
-                                        : fs::path(pvtu_path).extension() == ".msh";
+  // One file (.msh, .inp) or .pvtu pieces.
+  std::optional<io::MeshFormat> one_file;
   run_collectively(comm, [&] {
-    if (!msh && (write_options.format || fs::path(pvtu_path).extension() != ".pvtu"))
-      throw InputError(pvtu_path, "", "--stream writes .pvtu pieces or one .msh: name the output NAME.pvtu or NAME.msh");
+    if (write_options.format || fs::path(pvtu_path).extension() != ".pvtu") {
+      one_file = write_options.format ? *write_options.format : io::mesh_format_of(pvtu_path);
+      if (*one_file != io::MeshFormat::msh && *one_file != io::MeshFormat::inp)
+        throw InputError(pvtu_path, "", "--stream writes .pvtu pieces or one .msh or .inp file: name the output "
+                                        "NAME.pvtu, NAME.msh or NAME.inp");
+    }
     check_streamable(scene, options.pipeline);
   });
   std::vector<PartitionFaces<Dim>> faces;
@@ -212,7 +325,7 @@ DistributedMesh<Dim> mesh_streamed(const Comm& comm, geometry::SceneDesc scene, 
       mesh_partitions<Dim>(comm, std::move(scene), options, [&](PartitionOutput<Dim>& o, const grid::Lattice<Dim>& lattice) {
         ScopedPhase timer(&spooling, "write");
         faces.push_back(partition_faces<Dim>(o, lattice));
-        if (msh) summaries.push_back(io::msh_part_summary<Dim>(o.result.mesh, write_options));
+        if (one_file) summaries.push_back(io::msh_part_summary<Dim>(o.result.mesh, write_options));
         spools.push_back(spool<Dim>(pvtu_path, o.result.mesh));
         o.result = pipeline::Result<Dim>{};
       });
@@ -227,9 +340,13 @@ DistributedMesh<Dim> mesh_streamed(const Comm& comm, geometry::SceneDesc scene, 
   out.piece.owned_nodes = numbering.owned_nodes;
 
   ScopedPhase timer(&out.times, "write");
-  if (msh) {
-    write_streamed_msh<Dim>(comm, pvtu_path, faces, numbering, spools, summaries, options.partitions, out.phases,
-                            write_options, on_partition);
+  if (one_file) {
+    if (*one_file == io::MeshFormat::msh)
+      write_streamed_msh<Dim>(comm, pvtu_path, faces, numbering, spools, summaries, options.partitions, out.phases,
+                              write_options, on_partition);
+    else
+      write_streamed_inp<Dim>(comm, pvtu_path, faces, numbering, spools, summaries, options.partitions, out.phases,
+                              write_options, on_partition);
     return out;
   }
   run_collectively(comm, [&] {

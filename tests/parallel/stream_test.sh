@@ -1,6 +1,7 @@
 #!/bin/bash
 # `cisamr mesh --stream` (issue #15): partitions meshed one after another and written as
-# .vtu pieces of their own, or as one Gmsh .msh joined from every partition's chunks. On a 2D and a 3D example: the streamed mesh is the sequential
+# .vtu pieces of their own, or as one Gmsh .msh or Abaqus .inp joined from every
+# partition's chunks. On a 2D and a 3D example: the streamed mesh is the sequential
 # one (report checksum), on 1 rank and under mpiexec; VTK reads the pieces back and finds
 # exactly the in-memory path's mesh for the same partitions (global id -> point, cells as
 # global ids with their phase); certify checks the streamed .pvtu against the scene; a mesh
@@ -35,6 +36,42 @@ if a != b:
     print("differ:", a[0], b[0], {k: len(v) for k, v in a[1].items()}, {k: len(v) for k, v in b[1].items()}, a[2], b[2])
     sys.exit(1)
 print(f"same .msh: {a[0]} nodes, " + ", ".join(f"{len(v)} {k}" for k, v in a[1].items()))
+EOF
+}
+
+# The same .inp content through meshio: cells, element sets (phases, face sides) as sets of
+# cells, node sets as sets of points (node numbering may differ).
+same_inp() {  # same_inp A.inp B.inp
+  /usr/bin/python3 - "$1" "$2" <<'EOF'
+import sys
+import meshio
+def load(path):
+    m = meshio.read(path)
+    cells = {}
+    for block in m.cells:
+        cells.setdefault(block.type, []).extend(tuple(sorted(map(tuple, c))) for c in m.points[block.data])
+    # element sets as sets of cells (coordinates), node sets as sets of points
+    flat = [tuple(sorted(map(tuple, c))) for block in m.cells for c in m.points[block.data]]
+    offsets, at = [], 0
+    for block in m.cells:
+        offsets.append(at); at += len(block.data)
+    csets = {}
+    for name, per_block in m.cell_sets.items():
+        members = set()
+        for b, idx in enumerate(per_block):
+            if idx is None: continue
+            for i in idx: members.add(flat[offsets[b] + int(i)])
+        csets[name] = members
+    psets = {name: set(map(tuple, m.points[idx])) for name, idx in m.point_sets.items()}
+    return len(m.points), {k: sorted(v) for k, v in cells.items()}, csets, psets
+a, b = load(sys.argv[1]), load(sys.argv[2])
+if a != b:
+    print("differ:", a[0], b[0], {k: len(v) for k, v in a[1].items()}, {k: len(v) for k, v in b[1].items()},
+          sorted((k, len(v)) for k, v in a[2].items()), sorted((k, len(v)) for k, v in b[2].items()),
+          sorted((k, len(v)) for k, v in a[3].items()), sorted((k, len(v)) for k, v in b[3].items()))
+    sys.exit(1)
+print(f"same .inp: {a[0]} nodes, " + ", ".join(f"{len(v)} {k}" for k, v in a[1].items()) +
+      f", element sets {sorted(a[2])}, node sets {sorted(a[3])}")
 EOF
 }
 
@@ -151,7 +188,36 @@ for scene in "$examples/composite.json" "$examples/spheres3d.json"; do
   certificate "$dir/$name-s.msh" > "$dir/cert-sm.txt"
   diff "$dir/cert-sm.txt" "$dir/cert-seq.txt" || fail "$name: the streamed .msh certificate differs"
 
+  # One Abaqus file the same way: the sequential .inp's keyword lines, in order, and its
+  # cells and sets through meshio; CalculiX finds the same apparent modulus on both.
+  "$cisamr" mesh "$scene" -o "$dir/$name-seq.inp" -q || fail "$name: sequential .inp"
+  "$cisamr" mesh "$scene" -o "$dir/$name-s.inp" --stream --partitions 7 --report "$dir/$name-si.json" -q ||
+    fail "$name: --stream .inp"
+  [ "$(checksum "$dir/$name-si.json")" = "$ref" ] || fail "$name: --stream .inp checksum differs"
+  ls -a "$dir" | grep -q "spool\|chunk" && fail "$name: a spool or chunk was left behind (.inp)"
+  diff <(grep '^\*' "$dir/$name-seq.inp" | grep -v '^\*\*') <(grep '^\*' "$dir/$name-s.inp" | grep -v '^\*\*') ||
+    fail "$name: the streamed .inp's keyword lines differ"
+  same_inp "$dir/$name-s.inp" "$dir/$name-seq.inp" || fail "$name: the streamed .inp is not the sequential one"
+  if command -v ccx > /dev/null; then
+    materials=()
+    for set in $(sed -n 's/^\*ELEMENT.*ELSET=\(.*\)$/\1/p' "$dir/$name-seq.inp"); do
+      materials+=(--material "$set=$((1000 * (${#materials[@]} + 1))),0.3")
+    done
+    for m in seq s; do
+      /usr/bin/python3 "$examples/../../validation/fe/cisamr_fe.py" uniaxial "$dir/$name-$m.inp" "${materials[@]}" \
+        --json "$dir/fe-$m.json" > /dev/null || fail "$name: CalculiX on the $m .inp"
+    done
+    /usr/bin/python3 -c 'import json, sys
+a, b = (json.load(open(p))["apparent_modulus"] for p in sys.argv[1:3])
+print(f"CalculiX: apparent modulus {a:.12g} (streamed) and {b:.12g} (sequential)")
+sys.exit(0 if abs(a - b) <= 1e-9 * abs(b) else 1)' "$dir/fe-s.json" "$dir/fe-seq.json" || fail "$name: CalculiX moduli differ"
+  fi
+
   if [ -n "$mpiexec" ]; then
+    run_mpi 3 "$cisamr" mesh "$scene" -o "$dir/$name-3.inp" --stream --partitions 7 --report "$dir/$name-3i.json" -q ||
+      fail "$name: 3 ranks --stream .inp"
+    [ "$(checksum "$dir/$name-3i.json")" = "$ref" ] || fail "$name: 3 ranks --stream .inp checksum differs"
+    same_inp "$dir/$name-3.inp" "$dir/$name-seq.inp" || fail "$name: 3 ranks stream another .inp"
     run_mpi 3 "$cisamr" mesh "$scene" -o "$dir/$name-3.msh" --stream --partitions 7 --report "$dir/$name-3m.json" -q ||
       fail "$name: 3 ranks --stream .msh"
     [ "$(checksum "$dir/$name-3m.json")" = "$ref" ] || fail "$name: 3 ranks --stream .msh checksum differs"
@@ -227,7 +293,7 @@ refused() {  # refused WHAT ARGS...
 }
 mkdir -p "$dir/bad"
 refused "--gather" "$examples/composite.json" -o "$dir/bad/x.pvtu" --stream --gather
-refused "not .pvtu or .msh" "$examples/composite.json" -o "$dir/bad/x.inp" --stream
+refused "not .pvtu, .msh or .inp" "$examples/composite.json" -o "$dir/bad/x.mesh" --stream
 refused "--svg" "$examples/composite.json" -o "$dir/bad/x.pvtu" --stream --svg "$dir/bad/x.svg"
 refused "--cohesive" "$examples/composite.json" -o "$dir/bad/x.pvtu" --stream --cohesive
 refused "periodic" "$examples/rve3d.json" -o "$dir/bad/x.pvtu" --stream
