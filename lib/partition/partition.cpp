@@ -226,8 +226,16 @@ int rebalance(const LoadField& f, std::vector<RBox>& boxes) {
   return moves;
 }
 
+// A cut whose worse side is within this fraction of the best cut's is as good: of those, the
+// one with the smaller face wins. Exact balance can ask for slabs a few cubes thick across
+// the domain, whose ghost costs more memory than the balance gains time (E4 at 16
+// partitions: imbalance 1.009 → 1.020, ghost 0.53 → 0.40 of the domain, peak memory per
+// rank 2.01 → 1.46 GiB, the time within noise).
+constexpr double kBalanceTolerance = 0.005;
+
 // Load-weighted recursive bisection: k parts in `box`; each cut (any axis, on a lattice
-// line) minimises max(load_left / k_left, load_right / k_right); ties: the smaller face.
+// line) minimises max(load_left / k_left, load_right / k_right), to kBalanceTolerance;
+// among those, the smaller face.
 void bisect(const LoadField& f, const RBox& box, int k, std::vector<RBox>& out) {
   if (k == 1) {
     out.push_back(box);
@@ -236,6 +244,11 @@ void bisect(const LoadField& f, const RBox& box, int k, std::vector<RBox>& out) 
   const int k1 = k / 2, k2 = k - k1;
   double best = INFINITY, best_face = INFINITY;
   RBox best_a, best_b;
+  struct Cut {
+    double worst, face;
+    RBox a, b;
+  };
+  std::vector<Cut> cuts;
   for (int axis = 0; axis < f.dim; ++axis) {
     std::int64_t cross = 1;  // raster cells in a slab of thickness 1
     for (int d = 0; d < f.dim; ++d)
@@ -249,14 +262,16 @@ void bisect(const LoadField& f, const RBox& box, int k, std::vector<RBox>& out) 
       b.load = f.box_load(b.lo, b.hi);
       const double worst = std::max(a.load / k1, b.load / k2);
       const double face = face_measure(f, a, b, axis);
-      if (worst < best * (1 - 1e-12) || (worst <= best * (1 + 1e-12) && face < best_face)) {
-        best = worst;
-        best_face = face;
-        best_a = a;
-        best_b = b;
-      }
+      cuts.push_back({worst, face, a, b});
+      best = std::min(best, worst);
     }
   }
+  for (const Cut& cut : cuts)
+    if (cut.worst <= best * (1 + kBalanceTolerance) && cut.face < best_face) {
+      best_face = cut.face;
+      best_a = cut.a;
+      best_b = cut.b;
+    }
   if (!std::isfinite(best)) {  // too thin to cut: cannot happen when the box has ≥ k cells
     out.push_back(box);
     return;
