@@ -7,7 +7,6 @@
 #include <cstdio>
 #include <algorithm>
 #include <atomic>
-#include <cctype>
 #include <chrono>
 #include <condition_variable>
 #include <mutex>
@@ -357,12 +356,6 @@ std::optional<quality::Certificate> certify_pvtu_by_pieces(const CertifyArgs& ar
   return c;
 }
 
-bool has_extension(const std::string& path, const char* extension) {
-  std::string e = std::filesystem::path(path).extension().string();
-  for (char& ch : e) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
-  return e == extension;
-}
-
 }  // namespace
 
 void add_certify_command(CLI::App& app, GlobalFlags& flags, int& exit_code) {
@@ -400,7 +393,7 @@ void add_certify_command(CLI::App& app, GlobalFlags& flags, int& exit_code) {
     PhaseTimes times;
     std::optional<quality::Certificate> by_pieces;
     std::vector<geometry::Phase> piece_phases;
-    if (has_extension(args->mesh, ".pvtu") && !args->whole) by_pieces = certify_pvtu_by_pieces(*args, piece_phases, flags, times);
+    if (io::lowercase_extension(args->mesh) == ".pvtu" && !args->whole) by_pieces = certify_pvtu_by_pieces(*args, piece_phases, flags, times);
     quality::Certificate c;
     if (by_pieces) {
       c = std::move(*by_pieces);

@@ -166,6 +166,10 @@ struct LoadedMesh {
 // before anything is reserved.
 LoadedMesh read_mesh(const std::string& path);
 
+// The path's extension in lower case, dot included ("" when it has none): how the readers
+// and writers recognise a format.
+std::string lowercase_extension(const std::string& path);
+
 // The .vtu pieces a .pvtu lists, in order, as paths (relative ones resolved against the
 // .pvtu's folder).
 std::vector<std::string> pvtu_piece_paths(const std::string& path);

@@ -171,8 +171,7 @@ LoadedMesh finish(RawMesh raw, const std::string& path) {
 
 LoadedMesh read_mesh(const std::string& path) {
   // Formats read but not written: by their extension first.
-  std::string extension = std::filesystem::path(path).extension().string();
-  for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  const std::string extension = lowercase_extension(path);
   if (extension == ".pvtu") return detail::read_pvtu(path);
   if (extension == ".vtk") return detail::read_legacy_vtk(path);
   if (extension == ".node" || extension == ".ele") return detail::read_tetgen(path);

@@ -1210,13 +1210,17 @@ void write_medit_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m,
 
 }  // namespace
 
+std::string lowercase_extension(const std::string& path) {
+  std::string extension = std::filesystem::path(path).extension().string();
+  for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return extension;
+}
+
 MeshFormat mesh_format_of(const std::string& path) {
   if (path.empty()) throw InputError("\"\"", "", "cannot write: the output path is empty");
   if (path == "-") throw InputError(path, "", "standard output has no file extension: name the mesh format");
-  std::string extension = std::filesystem::path(path).extension().string();
-  std::string lower = extension;
-  std::transform(lower.begin(), lower.end(), lower.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  const std::string extension = std::filesystem::path(path).extension().string();
+  const std::string lower = lowercase_extension(path);
   if (lower == ".vtu") return MeshFormat::vtu;
   if (lower == ".msh") return MeshFormat::msh;
   if (lower == ".inp") return MeshFormat::inp;

@@ -60,6 +60,21 @@ mesh::SimplexMesh<Dim> unspool(const io::AtomicFile& file) {
   return m;
 }
 
+// Partition k of this rank read back from its spool (deleted then) with its global ids and
+// partition index, after the driver's figures have seen it: what every output writes.
+template <int Dim>
+mesh::SimplexMesh<Dim> read_back_numbered(std::vector<std::unique_ptr<io::AtomicFile>>& spools,
+                                          const std::vector<PartitionFaces<Dim>>& faces,
+                                          const StreamNumbering<Dim>& numbering, std::size_t k,
+                                          const std::function<void(const mesh::SimplexMesh<Dim>&)>& on_partition) {
+  mesh::SimplexMesh<Dim> m = unspool<Dim>(*spools[k]);
+  spools[k].reset();  // the temporary is deleted
+  m.node_global_id = global_ids_of<Dim>(faces[k], numbering.offset[k], numbering.face_ids[k]);
+  m.cell_partition.assign(m.cell_phase.size(), faces[k].partition);
+  if (on_partition) on_partition(m);
+  return m;
+}
+
 // A partition's chunks of a streamed one-file output (.msh, .inp), in the order its joiner
 // reads them: hidden temporaries beside the output, never committed (gone with the run, or
 // when a signal ends it); and the min corner node's global id when the partition owns it.
@@ -129,11 +144,7 @@ void write_streamed_file(const Comm& comm, const std::string& path, const std::v
   std::vector<PartitionChunks> chunks;
   run_collectively(comm, [&] {
     for (std::size_t k = 0; k < faces.size(); ++k) {
-      mesh::SimplexMesh<Dim> m = unspool<Dim>(*spools[k]);
-      spools[k].reset();
-      m.node_global_id = global_ids_of<Dim>(faces[k], numbering.offset[k], numbering.face_ids[k]);
-      m.cell_partition.assign(m.cell_phase.size(), faces[k].partition);
-      if (on_partition) on_partition(m);
+      const mesh::SimplexMesh<Dim> m = read_back_numbered<Dim>(spools, faces, numbering, k, on_partition);
       PartitionChunks c;
       c.partition = faces[k].partition;
       write_chunks(m, k, all, c);
@@ -351,11 +362,7 @@ DistributedMesh<Dim> mesh_streamed(const Comm& comm, geometry::SceneDesc scene, 
   }
   run_collectively(comm, [&] {
     for (std::size_t k = 0; k < faces.size(); ++k) {
-      mesh::SimplexMesh<Dim> m = unspool<Dim>(*spools[k]);
-      spools[k].reset();  // the temporary is deleted
-      m.node_global_id = global_ids_of<Dim>(faces[k], numbering.offset[k], numbering.face_ids[k]);
-      m.cell_partition.assign(m.cell_phase.size(), faces[k].partition);
-      if (on_partition) on_partition(m);
+      const mesh::SimplexMesh<Dim> m = read_back_numbered<Dim>(spools, faces, numbering, k, on_partition);
       io::write_vtu(piece_path(pvtu_path, faces[k].partition), m, out.phases, write_options);
     }
   });
