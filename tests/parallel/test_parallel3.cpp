@@ -7,7 +7,9 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <cstring>
 #include <fstream>
+#include <random>
 
 #include "grid/tet_lattice.hpp"
 #include "io/scene_io.hpp"
@@ -53,6 +55,48 @@ TEST(EffectiveLevels3, SpreadCarriesTheFinerLevelToCloseNeighbours) {
   EXPECT_EQ(levels_of(two_spheres(0.5, 2, 0, 2)), (std::vector<int>{2, 2}));
   // Level 1 needs closer than 8·0.0625 = 0.5: 0.55 is not.
   EXPECT_EQ(levels_of(two_spheres(0.55, 2, 1, 2)), (std::vector<int>{1, 2}));
+}
+
+// The canonical form of a cell is the lexicographically smallest of its even permutations
+// (checksum.hpp); the checksum's shortcut for distinct vertices must find the same one as
+// trying them all, and cells with coincident vertices (degenerate, but a checksum must
+// still be order-free for them) take the full search.
+TEST(Checksum, CanonicalFormIsTheSmallestEvenPermutation) {
+  const std::array<std::array<int, 4>, 12> even{{{0, 1, 2, 3}, {0, 2, 3, 1}, {0, 3, 1, 2}, {1, 0, 3, 2},
+                                                 {1, 3, 2, 0}, {1, 2, 0, 3}, {2, 0, 1, 3}, {2, 1, 3, 0},
+                                                 {2, 3, 0, 1}, {3, 0, 2, 1}, {3, 2, 1, 0}, {3, 1, 0, 2}}};
+  std::mt19937_64 rng(7);
+  mesh::Mesh3 m;
+  const int cells = 4000;
+  for (int c = 0; c < cells; ++c) {
+    // Few distinct values per coordinate, so that vertices often share coordinates (ties
+    // decided by later components) and some cells repeat a vertex.
+    for (int k = 0; k < 4; ++k) {
+      const std::size_t repeat = c % 5 == 0 && k == 3 ? 1 : 0;
+      for (int d = 0; d < 3; ++d)
+        m.coords.push_back(repeat ? m.coords[m.coords.size() - 3] : std::array{-1.0, -0.0, 0.0, 1.0}[rng() % 4]);
+      m.cell_nodes.push_back(static_cast<LocalId>(4 * c + k));
+    }
+    m.cell_phase.push_back(static_cast<std::int32_t>(c % 3));
+  }
+  std::vector<CanonicalTet> expected;
+  for (int c = 0; c < cells; ++c) {
+    CanonicalTet best;
+    for (std::size_t p = 0; p < even.size(); ++p) {
+      CanonicalTet t;
+      for (int k = 0; k < 4; ++k)
+        for (int d = 0; d < 3; ++d) {
+          double x = m.coords[3 * static_cast<std::size_t>(4 * c + even[p][static_cast<std::size_t>(k)]) + static_cast<std::size_t>(d)];
+          if (x == 0) x = 0;  // -0 and +0 are one point
+          std::memcpy(&t.xyz[static_cast<std::size_t>(3 * k + d)], &x, sizeof x);
+        }
+      if (p == 0 || t.xyz < best.xyz) best = t;
+    }
+    best.phase = m.cell_phase[static_cast<std::size_t>(c)];
+    expected.push_back(best);
+  }
+  std::sort(expected.begin(), expected.end());
+  EXPECT_EQ(canonical_tets(m), expected);
 }
 
 TEST(Scenes3, AreValid) {
