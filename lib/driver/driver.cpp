@@ -162,8 +162,8 @@ void add_phase_figures(const mesh::SimplexMesh<Dim>& piece, const std::vector<ge
 // A streamed partition's share of the figures take_figures reduces (this rank's so far).
 template <int Dim>
 void add_figures(MeshRun<Dim>& run, const mesh::SimplexMesh<Dim>& part, const std::vector<geometry::Phase>& phases,
-                 std::uint64_t& checksum) {
-  quality::merge_into(run.aspect, quality::aspect_statistics(part, run.bound));
+                 std::uint64_t& checksum, std::vector<double>* cell_aspect_ratio) {
+  quality::merge_into(run.aspect, quality::aspect_statistics(part, run.bound, 20, cell_aspect_ratio));
   if (!run.options.figures) return;
   add_phase_figures(part, phases, run.phase_figures);
   checksum += parallel::mesh_checksum(part);
@@ -296,9 +296,9 @@ std::variant<MeshRun<2>, MeshRun<3>> mesh_scene(const Comm& comm, const std::str
           std::uint64_t checksum = 0;
           PhaseTimes figures;
           run.mesh = parallel::mesh_streamed<Dim>(comm, std::move(scene), o, run.options.stream, write,
-                                                  [&](const mesh::SimplexMesh<Dim>& part) {
+                                                  [&](const mesh::SimplexMesh<Dim>& part, std::vector<double>* ratios) {
                                                     ScopedPhase timer(&figures, "quality");
-                                                    add_figures(run, part, phases, checksum);
+                                                    add_figures(run, part, phases, checksum, ratios);
                                                   });
           for (const auto& [name, seconds] : figures.phases()) run.mesh.times.add(name, seconds);
           run.checksum = checksum;

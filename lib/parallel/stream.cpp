@@ -66,12 +66,13 @@ template <int Dim>
 mesh::SimplexMesh<Dim> read_back_numbered(std::vector<std::unique_ptr<io::AtomicFile>>& spools,
                                           const std::vector<PartitionFaces<Dim>>& faces,
                                           const StreamNumbering<Dim>& numbering, std::size_t k,
-                                          const std::function<void(const mesh::SimplexMesh<Dim>&)>& on_partition) {
+                                          const PartitionHook<Dim>& on_partition,
+                                          std::vector<double>* cell_aspect_ratio = nullptr) {
   mesh::SimplexMesh<Dim> m = unspool<Dim>(*spools[k]);
   spools[k].reset();  // the temporary is deleted
   m.node_global_id = global_ids_of<Dim>(faces[k], numbering.offset[k], numbering.face_ids[k]);
   m.cell_partition.assign(m.cell_phase.size(), faces[k].partition);
-  if (on_partition) on_partition(m);
+  if (on_partition) on_partition(m, cell_aspect_ratio);
   return m;
 }
 
@@ -117,7 +118,7 @@ template <int Dim, class WriteChunks, class Join>
 void write_streamed_file(const Comm& comm, const std::string& path, const std::vector<PartitionFaces<Dim>>& faces,
                          const StreamNumbering<Dim>& numbering, std::vector<std::unique_ptr<io::AtomicFile>>& spools,
                          std::vector<io::MshPartSummary>& summaries, int partitions,
-                         const std::function<void(const mesh::SimplexMesh<Dim>&)>& on_partition,
+                         const PartitionHook<Dim>& on_partition,
                          WriteChunks&& write_chunks, Join&& join) {
   Packer mine;
   for (std::size_t k = 0; k < faces.size(); ++k) {
@@ -189,7 +190,7 @@ void write_streamed_msh(const Comm& comm, const std::string& path, const std::ve
                         const StreamNumbering<Dim>& numbering, std::vector<std::unique_ptr<io::AtomicFile>>& spools,
                         std::vector<io::MshPartSummary>& summaries, int partitions,
                         const std::vector<geometry::Phase>& phases, const io::MeshWriteOptions& write_options,
-                        const std::function<void(const mesh::SimplexMesh<Dim>&)>& on_partition) {
+                        const PartitionHook<Dim>& on_partition) {
   constexpr std::size_t kFaces = static_cast<std::size_t>(2 * Dim);
   // Tags: cells by partition, then the facets face by face, partition by partition.
   const auto first_cells = [](const std::vector<io::MshPartSummary>& all) {
@@ -233,7 +234,7 @@ void write_streamed_inp(const Comm& comm, const std::string& path, const std::ve
                         const StreamNumbering<Dim>& numbering, std::vector<std::unique_ptr<io::AtomicFile>>& spools,
                         std::vector<io::MshPartSummary>& summaries, int partitions,
                         const std::vector<geometry::Phase>& phases, const io::MeshWriteOptions& write_options,
-                        const std::function<void(const mesh::SimplexMesh<Dim>&)>& on_partition) {
+                        const PartitionHook<Dim>& on_partition) {
   constexpr int kFaces = 2 * Dim, kSides = Dim + 1;
   const auto phase_ids = [](const std::vector<io::MshPartSummary>& all) {
     std::vector<int> ids;
@@ -316,7 +317,7 @@ void check_streamable(const geometry::SceneDesc& scene, const pipeline::Options&
 template <int Dim>
 DistributedMesh<Dim> mesh_streamed(const Comm& comm, geometry::SceneDesc scene, const MeshOptions& options,
                                    const std::string& pvtu_path, const io::MeshWriteOptions& write_options,
-                                   const std::function<void(const mesh::SimplexMesh<Dim>&)>& on_partition) {
+                                   const PartitionHook<Dim>& on_partition) {
   // One file (.msh, .inp) or .pvtu pieces.
   std::optional<io::MeshFormat> one_file;
   run_collectively(comm, [&] {
@@ -362,8 +363,10 @@ DistributedMesh<Dim> mesh_streamed(const Comm& comm, geometry::SceneDesc scene, 
   }
   run_collectively(comm, [&] {
     for (std::size_t k = 0; k < faces.size(); ++k) {
-      const mesh::SimplexMesh<Dim> m = read_back_numbered<Dim>(spools, faces, numbering, k, on_partition);
-      io::write_vtu(piece_path(pvtu_path, faces[k].partition), m, out.phases, write_options);
+      io::MeshWriteOptions piece_options = write_options;
+      const mesh::SimplexMesh<Dim> m =
+          read_back_numbered<Dim>(spools, faces, numbering, k, on_partition, &piece_options.cell_aspect_ratio);
+      io::write_vtu(piece_path(pvtu_path, faces[k].partition), m, out.phases, piece_options);
     }
   });
   run_collectively(comm, [&] {
@@ -379,9 +382,9 @@ DistributedMesh<Dim> mesh_streamed(const Comm& comm, geometry::SceneDesc scene, 
 
 template DistributedMesh<2> mesh_streamed<2>(const Comm&, geometry::SceneDesc, const MeshOptions&, const std::string&,
                                              const io::MeshWriteOptions&,
-                                             const std::function<void(const mesh::SimplexMesh<2>&)>&);
+                                             const PartitionHook<2>&);
 template DistributedMesh<3> mesh_streamed<3>(const Comm&, geometry::SceneDesc, const MeshOptions&, const std::string&,
                                              const io::MeshWriteOptions&,
-                                             const std::function<void(const mesh::SimplexMesh<3>&)>&);
+                                             const PartitionHook<3>&);
 
 }  // namespace cisamr::parallel

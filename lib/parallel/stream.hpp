@@ -26,15 +26,23 @@ namespace cisamr::parallel {
 // paired between partitions after meshing) and periodic scenes (masters across the domain).
 void check_streamable(const geometry::SceneDesc& scene, const pipeline::Options& options);
 
+// Sees each streamed partition's mesh, with global ids, just before it is written (the
+// driver's figures). Where the output has a per-cell aspect-ratio array (.vtu pieces),
+// `cell_aspect_ratio` is not null: a hook that computes every cell's ratio anyway may fill
+// it (one per cell, mesh::aspect_ratio's values) and the writer takes it instead of
+// computing them a second time.
+template <int Dim>
+using PartitionHook = std::function<void(const mesh::SimplexMesh<Dim>&, std::vector<double>* cell_aspect_ratio)>;
+
 // Collective. Meshes `scene` over options.partitions partitions, writing the .pvtu at
 // `pvtu_path` and one piece per partition (inside the caller's io::OutputSet when one is
-// open: nothing appears before its commit). `on_partition` sees each partition's mesh, with
-// global ids, just before it is written (the driver's figures). The result has no piece:
+// open: nothing appears before its commit). `on_partition` sees each partition's mesh
+// (PartitionHook). The result has no piece:
 // piece.global_nodes and owned_nodes are set, partitions, counters, times as
 // mesh_distributed's. Errors are collective.
 template <int Dim>
 DistributedMesh<Dim> mesh_streamed(const Comm& comm, geometry::SceneDesc scene, const MeshOptions& options,
                                    const std::string& pvtu_path, const io::MeshWriteOptions& write_options,
-                                   const std::function<void(const mesh::SimplexMesh<Dim>&)>& on_partition);
+                                   const PartitionHook<Dim>& on_partition);
 
 }  // namespace cisamr::parallel

@@ -36,7 +36,11 @@ void add_triangle_angles(const Vec2& a, const Vec2& b, const Vec2& c, AngleRange
   r.add(-(bc[0] * ca[0] + bc[1] * ca[1]) / std::sqrt(lbc * lca));
 }
 
-void add_dihedral_angles(const Vec3* p, AngleRange& r) {
+// Adds the tet's dihedral angles to `r` and returns its aspect ratio, equal bit for bit to
+// mesh::aspect_ratio(p[0], p[1], p[2], p[3]): the faces' cross products serve both (each
+// face area there is half the norm of the same cross product, up to an exact sign flip,
+// summed in the same order), which saves a third of the statistics' time.
+double add_dihedral_angles(const Vec3* p, AngleRange& r) {
   // Outward normal of the face opposite vertex i (unnormalised).
   static constexpr int kFace[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
   double n[4][3], len2[4];
@@ -61,6 +65,17 @@ void add_dihedral_angles(const Vec3* p, AngleRange& r) {
       r.add(-(n[k][0] * n[l][0] + n[k][1] * n[l][1] + n[k][2] * n[l][2]) /
             std::sqrt(len2[k] * len2[l]));
     }
+  const double volume = std::abs(mesh::signed_volume(p[0], p[1], p[2], p[3]));
+  if (!(volume > 0)) return std::numeric_limits<double>::infinity();
+  const double faces = 0.5 * std::sqrt(len2[0]) + 0.5 * std::sqrt(len2[1]) + 0.5 * std::sqrt(len2[2]) +
+                       0.5 * std::sqrt(len2[3]);
+  const double r_in = 3.0 * volume / faces;
+  const auto sq = [](const Vec3& x, const Vec3& y) {
+    return (x[0] - y[0]) * (x[0] - y[0]) + (x[1] - y[1]) * (x[1] - y[1]) + (x[2] - y[2]) * (x[2] - y[2]);
+  };
+  const double l_max = std::sqrt(std::max({sq(p[0], p[1]), sq(p[0], p[2]), sq(p[0], p[3]), sq(p[1], p[2]),
+                                           sq(p[1], p[3]), sq(p[2], p[3])}));
+  return l_max / (2.0 * std::sqrt(6.0) * r_in);
 }
 
 // Orders the heap so that its top is the *least* bad of the kept cells.
@@ -89,7 +104,8 @@ std::size_t raw_bin(double ar) {
 }  // namespace
 
 template <int Dim>
-AspectStats aspect_statistics(const mesh::SimplexMesh<Dim>& m, double bound, int worst_count) {
+AspectStats aspect_statistics(const mesh::SimplexMesh<Dim>& m, double bound, int worst_count,
+                              std::vector<double>* cell_aspect_ratio) {
   AspectStats s;
   s.bound = bound;
   s.count = m.cell_count();
@@ -101,6 +117,7 @@ AspectStats aspect_statistics(const mesh::SimplexMesh<Dim>& m, double bound, int
   double max_finite = 0;
   AngleRange angles;
   const std::size_t nodes = m.node_count();
+  if (cell_aspect_ratio != nullptr) cell_aspect_ratio->resize(s.count);
 
   for (std::size_t c = 0; c < s.count; ++c) {
     const LocalId* cn = m.cell(c);
@@ -108,7 +125,17 @@ AspectStats aspect_statistics(const mesh::SimplexMesh<Dim>& m, double bound, int
     for (int k = 0; k <= Dim; ++k)
       if (cn[k] < 0 || static_cast<std::size_t>(cn[k]) >= nodes) valid = false;
     // A cell naming a missing node counts as degenerate (check_conformity reports it).
-    const double ar = valid ? mesh::cell_aspect_ratio(m, c) : std::numeric_limits<double>::infinity();
+    double ar = std::numeric_limits<double>::infinity();
+    if (valid) {
+      if constexpr (Dim == 2) {
+        ar = mesh::cell_aspect_ratio(m, c);
+        add_triangle_angles(m.point(cn[0]), m.point(cn[1]), m.point(cn[2]), angles);
+      } else {
+        const Vec3 p[4] = {m.point(cn[0]), m.point(cn[1]), m.point(cn[2]), m.point(cn[3])};
+        ar = add_dihedral_angles(p, angles);
+      }
+    }
+    if (cell_aspect_ratio != nullptr) (*cell_aspect_ratio)[c] = ar;
     if (std::isfinite(ar)) {
       sum += ar;
       ++finite;
@@ -120,15 +147,6 @@ AspectStats aspect_statistics(const mesh::SimplexMesh<Dim>& m, double bound, int
       ++infinite;
     }
     if (!(ar <= bound)) ++s.above_bound;
-
-    if (valid) {
-      if constexpr (Dim == 2) {
-        add_triangle_angles(m.point(cn[0]), m.point(cn[1]), m.point(cn[2]), angles);
-      } else {
-        const Vec3 p[4] = {m.point(cn[0]), m.point(cn[1]), m.point(cn[2]), m.point(cn[3])};
-        add_dihedral_angles(p, angles);
-      }
-    }
 
     if (keep > 0 && (s.worst.size() < keep || less_bad(s.worst.front(), {c, ar, {}, 0}))) {
       AspectStats::Worst w;
@@ -167,8 +185,8 @@ AspectStats aspect_statistics(const mesh::SimplexMesh<Dim>& m, double bound, int
   return s;
 }
 
-template AspectStats aspect_statistics<2>(const mesh::SimplexMesh<2>&, double, int);
-template AspectStats aspect_statistics<3>(const mesh::SimplexMesh<3>&, double, int);
+template AspectStats aspect_statistics<2>(const mesh::SimplexMesh<2>&, double, int, std::vector<double>*);
+template AspectStats aspect_statistics<3>(const mesh::SimplexMesh<3>&, double, int, std::vector<double>*);
 
 void add_histogram(AspectStats& total, const std::vector<double>& edges, const std::vector<std::size_t>& hist) {
   if (edges.size() > total.bin_edges.size()) {

@@ -51,9 +51,12 @@ struct AspectStats {
   double min_angle_deg = 0, max_angle_deg = 0;
 };
 
-// One pass over the cells; O(cells), no allocation proportional to the mesh.
+// One pass over the cells; O(cells), no allocation proportional to the mesh unless
+// `cell_aspect_ratio` is given: then it receives every cell's ratio (mesh::aspect_ratio's
+// value, +inf for a cell naming a missing node), for a writer's per-cell array.
 template <int Dim>
-AspectStats aspect_statistics(const mesh::SimplexMesh<Dim>& m, double bound, int worst_count = 20);
+AspectStats aspect_statistics(const mesh::SimplexMesh<Dim>& m, double bound, int worst_count = 20,
+                              std::vector<double>* cell_aspect_ratio = nullptr);
 
 // Adds histogram `hist` over `edges` to `total`'s, bin by bin. Every statistics' edges are a
 // prefix of the same sequence (1.0, 1.1, ...), so the longer list is kept and the overflow

@@ -3,7 +3,9 @@
 
 #include <cmath>
 #include <numeric>
+#include <random>
 
+#include "mesh/metrics.hpp"
 #include "mesh_builders.hpp"
 #include "quality/quality.hpp"
 
@@ -175,6 +177,24 @@ TEST(AspectStatistics, StructuredTetMesh) {
   EXPECT_EQ(s.histogram[0], 8u);
   EXPECT_EQ(s.histogram[3], 32u);
   EXPECT_NEAR(s.max_angle_deg, 90.0, 1e-9);
+}
+
+// The statistics take each tet's aspect ratio from the face cross products they compute
+// for the dihedral angles; it must equal mesh::aspect_ratio bit for bit (the report's
+// maximum and worst cells are compared with certify's and with other tools).
+TEST(AspectStatistics, RatiosEqualTheMetricBitForBit) {
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> coordinate(-1.0, 1.0);
+  for (int trial = 0; trial < 2000; ++trial) {
+    std::array<Vec3, 4> p;
+    for (Vec3& x : p)
+      for (int d = 0; d < 3; ++d) x[d] = coordinate(rng);
+    if (trial % 7 == 0) p[3] = {p[0][0], p[0][1], p[0][2]};  // degenerate: +inf on both sides
+    const auto s = aspect_statistics<3>(single_tet(p[0], p[1], p[2], p[3]), 5.0, 1);
+    const double expected = mesh::aspect_ratio(p[0], p[1], p[2], p[3]);
+    ASSERT_EQ(s.max, expected) << "trial " << trial;
+    ASSERT_EQ(s.worst.at(0).aspect_ratio, expected) << "trial " << trial;
+  }
 }
 
 }  // namespace
