@@ -6,7 +6,6 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
-#include <unordered_map>
 #include <utility>
 
 #include "core/check.hpp"
@@ -22,6 +21,14 @@ using grid::LatticeKey3;
 using grid::LatticePoint3;
 
 int single_phase(PhaseMask m) { return single_bit(m) ? std::countr_zero(m) : -1; }
+
+// An edge's two keys mixed into 64 bits whose low bits (the open-addressing slot) depend on
+// every bit of both.
+struct EdgeKeyHash {
+  std::uint64_t operator()(const std::pair<LatticeKey3, LatticeKey3>& k) const {
+    return grid::LatticeKeyHash{}(grid::LatticeKeyHash{}(k.first) ^ (k.second * 0x9e3779b97f4a7c15ULL));
+  }
+};
 
 enum class OptionKind : std::uint8_t { snap, stay, collapse };
 constexpr int kMaxMenu = 8;  // options of one node: at most max_candidates snaps, stay, collapse
@@ -92,7 +99,9 @@ class Snapper {
   // Per node and phase joined by a collapse: the distance to the nearest point known to lie
   // on that phase's boundary (a crossing on a phase-changing edge, or the neighbour itself),
   // an upper bound of the collapse's deviation tighter than the oracle's for STL unions.
-  std::unordered_map<std::uint64_t, double> reach_;
+  // Keyed by node · 64 + phase (reach_index_: key → index into reach_).
+  grid::KeyMap reach_index_;
+  std::vector<double> reach_;
   std::vector<geometry::Crossing> crossings_;
   std::vector<std::int32_t> plane_candidates_;
 
@@ -202,7 +211,9 @@ class Snapper {
   //    crossings of each, once, on the segment oriented from the smaller key.
   void find_edges() {
     nodes_.cut_leaf_slot.assign(forest_.size(), -1);
-    EdgeIndex index;  // (lo, hi) → index into nodes_.edges, while they are found
+    // (lo, hi) → index into nodes_.edges, while they are found. Open addressing: a
+    // std::unordered_map spent a tenth of radapt allocating nodes and rehashing.
+    grid::OpenKeyMap<std::pair<LatticeKey3, LatticeKey3>, EdgeKeyHash> index(forest_.size() / 32 + 16);
     for (std::int32_t t = 0; t < static_cast<std::int32_t>(forest_.size()); ++t) {
       tet_done(1, t);
       if (!forest_.is_leaf(t) || !g_.is_cut(t)) continue;
@@ -216,9 +227,9 @@ class Snapper {
         EdgeFrame frame = edge_frame(lattice_, v[tet::kEdges[e][0]], v[tet::kEdges[e][1]]);
         if (grid::key3(frame.b) < grid::key3(frame.a)) std::swap(a, b), std::swap(frame.a, frame.b);
         const std::pair<LatticeKey3, LatticeKey3> k{grid::key3(frame.a), grid::key3(frame.b)};
-        auto [it, inserted] = index.try_emplace(k, static_cast<std::int32_t>(nodes_.edges.size()));
+        bool inserted = false;
+        slots[static_cast<std::size_t>(e)] = index.insert(k, static_cast<std::int32_t>(nodes_.edges.size()), inserted);
         if (inserted) add_edge(a, b, frame, t);
-        slots[static_cast<std::size_t>(e)] = it->second;
         any = true;
       }
       if (!any) continue;
@@ -332,8 +343,11 @@ class Snapper {
           for (PhaseMask rest = nodes_.mask[uw]; rest != 0; rest &= rest - 1) {
             const int phase = std::countr_zero(rest);
             const double d = (beyond >> phase) & 1 ? to_crossing : geo.length;
-            auto [it, inserted] = reach_.try_emplace(static_cast<std::uint64_t>(v) * 64 + static_cast<std::uint64_t>(phase), d);
-            if (!inserted) it->second = std::min(it->second, d);
+            bool inserted = false;
+            const std::int32_t at = reach_index_.insert(static_cast<std::uint64_t>(v) * 64 + static_cast<std::uint64_t>(phase),
+                                                        static_cast<std::int32_t>(reach_.size()), inserted);
+            if (inserted) reach_.push_back(d);
+            else reach_[static_cast<std::size_t>(at)] = std::min(reach_[static_cast<std::size_t>(at)], d);
           }
         }
         if (!ends.any) continue;
@@ -452,9 +466,9 @@ class Snapper {
 
   // The option of a bad combination to refuse: the deepest fallback first (a combination
   // happens only if every earlier option of its vertices was refused), then the highest
-  // score. Depth counts the earlier options not known to be refused (`gone`): once an
-  // option is refused, the node's next one is what is expected to happen. -1 when every
-  // vertex is at its last option.
+  // score. Depth counts the earlier options not known to be refused (`gone(i, j)`: vertex
+  // i's j-th menu entry): once an option is refused, the node's next one is what is expected
+  // to happen. -1 when every vertex is at its last option.
   template <class Gone>
   std::int32_t pick_refusal(const Menu& menu, const std::array<int, 4>& count, const std::array<int, 4>& at,
                             const std::array<std::int32_t, 4>& chosen, Gone&& gone) const {
@@ -465,7 +479,7 @@ class Snapper {
       if (o < 0 || at[static_cast<std::size_t>(i)] + 1 == count[static_cast<std::size_t>(i)]) continue;
       int rank = 0;
       for (int j = 0; j < at[static_cast<std::size_t>(i)]; ++j)
-        rank += gone(menu[static_cast<std::size_t>(i)][static_cast<std::size_t>(j)]) ? 0 : 1;
+        rank += gone(i, j) ? 0 : 1;
       if (pick < 0 || rank > pick_rank ||
           (rank == pick_rank && option_[static_cast<std::size_t>(o)].score > option_[static_cast<std::size_t>(pick)].score))
         pick = o, pick_rank = rank;
@@ -492,14 +506,14 @@ class Snapper {
       if (!forest_.is_leaf(t) || !build_menu(t, menu, count)) continue;
       memo_leaf(t);
       for (int i = 0; i < 4; ++i) chosen[static_cast<std::size_t>(i)] = menu[static_cast<std::size_t>(i)][0];
+      take_menu(t, menu, {1, 1, 1, 1});
       ++nodes_.combinations;
-      if (acceptable(t, chosen)) continue;
-      const std::int32_t pick = pick_refusal(menu, count, first, chosen, [](std::int32_t) { return false; });
+      if (acceptable(first)) continue;
+      const std::int32_t pick = pick_refusal(menu, count, first, chosen, [](int, int) { return false; });
       if (pick >= 0) likely[static_cast<std::size_t>(pick)] = 1;
     }
     for (std::size_t o = 0; o < likely.size(); ++o) refused_[o] = likely[o];
 
-    std::vector<std::int32_t> local_refused;
     for (std::int32_t t = 0; t < static_cast<std::int32_t>(forest_.size()); ++t) {
       tet_done(3, t);
       if (!forest_.is_leaf(t) || !build_menu(t, menu, count)) continue;
@@ -516,26 +530,30 @@ class Snapper {
         }
         n = kept;
       }
-      local_refused.clear();
-      const auto gone = [&](std::int32_t o) {
-        return o >= 0 && std::find(local_refused.begin(), local_refused.end(), o) != local_refused.end();
-      };
+      take_menu(t, menu, count);
+      // Bit j of gone_entries[i]: this leaf refused vertex i's j-th entry (each option is
+      // one node's, and a node is one vertex of the leaf: one bit per refusal).
+      std::array<std::uint8_t, 4> gone_entries{};
+      static_assert(kMaxMenu <= 8);
+      const auto gone = [&](int i, int j) { return (gone_entries[static_cast<std::size_t>(i)] >> j) & 1; };
       std::array<int, 4> at{0, 0, 0, 0};
       while (true) {
         bool skip = false;
         for (int i = 0; i < 4; ++i) {
           const std::int32_t o = menu[static_cast<std::size_t>(i)][static_cast<std::size_t>(at[static_cast<std::size_t>(i)])];
           chosen[static_cast<std::size_t>(i)] = o;
-          skip = skip || gone(o);
+          skip = skip || gone(i, at[static_cast<std::size_t>(i)]);
         }
         if (!skip) {
           ++nodes_.combinations;
-          if (!acceptable(t, chosen)) {
+          if (!acceptable(at)) {
             // No refusable option: every vertex at its last option, which keeps the leaf
             // whole and undeformed; only a leaf no two phases can split ends here.
             const std::int32_t pick = pick_refusal(menu, count, at, chosen, gone);
             if (pick >= 0) {
-              local_refused.push_back(pick);
+              for (int k = 0; k < 4; ++k)
+                if (chosen[static_cast<std::size_t>(k)] == pick)
+                  gone_entries[static_cast<std::size_t>(k)] |= static_cast<std::uint8_t>(1u << at[static_cast<std::size_t>(k)]);
               refused_[static_cast<std::size_t>(pick)] = 1;
             }
           }
@@ -550,22 +568,45 @@ class Snapper {
     }
   }
 
-  bool is_void(int phase) const { return oracle_.scene().phases[static_cast<std::size_t>(phase)].is_void; }
+  bool is_void(int phase) const { return (void_phases_ >> phase) & 1; }
+  // The scene's void phases as a mask (is_void runs for every tet the guard emits).
+  const PhaseMask void_phases_ = [this] {
+    PhaseMask m = 0;
+    const auto& phases = oracle_.scene().phases;
+    for (std::size_t k = 0; k < phases.size(); ++k)
+      if (phases[k].is_void) m |= PhaseMask{1} << k;
+    return m;
+  }();
 
-  // Would the leaf, with its vertices at these options (-1: the node has none, it stays),
-  // emit only positive tetrahedra within the bound, and could it be split?
-  bool acceptable(std::int32_t t, const std::array<std::int32_t, 4>& chosen) {
+  // What acceptable() reads of the first count[i] entries of vertex i's menu (-1: the node
+  // has none, it stays), in the leaf's frame: once per leaf, not once per combination.
+  void take_menu(std::int32_t t, const Menu& menu, const std::array<int, 4>& count) {
     const auto& ids = nodes_.tet_nodes[static_cast<std::size_t>(t)];
+    for (int i = 0; i < 4; ++i) {
+      const auto k = static_cast<std::size_t>(i);
+      const auto v = static_cast<std::size_t>(ids[k]);
+      for (int j = 0; j < count[k]; ++j) {
+        const std::int32_t o = menu[k][static_cast<std::size_t>(j)];
+        const bool snap = o >= 0 && option_[static_cast<std::size_t>(o)].kind == OptionKind::snap;
+        auto& entry = leaf_.entry[k][static_cast<std::size_t>(j)];
+        entry.p = lattice_.shifted(o < 0 ? nodes_.position[v] : option_[static_cast<std::size_t>(o)].position, leaf_.shift[k]);
+        entry.mask = o < 0 ? nodes_.mask[v] : option_[static_cast<std::size_t>(o)].mask;
+        entry.where = snap ? static_cast<std::uint32_t>(1 + o - option_begin_[v]) : 0;
+      }
+    }
+  }
+
+  // Would the leaf, with vertex i at entry at[i] of its menu (take_menu), emit only
+  // positive tetrahedra within the bound, and could it be split?
+  bool acceptable(const std::array<int, 4>& at) {
     std::array<PhaseMask, 4> mask{};
     std::array<std::uint32_t, 4> where{};  // 0: the lattice position, 1 + j: the node's j-th snap
     for (int i = 0; i < 4; ++i) {
       const auto k = static_cast<std::size_t>(i);
-      const std::int32_t o = chosen[k];
-      const auto v = static_cast<std::size_t>(ids[k]);
-      const bool snap = o >= 0 && option_[static_cast<std::size_t>(o)].kind == OptionKind::snap;
-      leaf_.p[k] = lattice_.shifted(o < 0 ? nodes_.position[v] : option_[static_cast<std::size_t>(o)].position, leaf_.shift[k]);
-      mask[k] = o < 0 ? nodes_.mask[v] : option_[static_cast<std::size_t>(o)].mask;
-      where[k] = snap ? static_cast<std::uint32_t>(1 + o - option_begin_[v]) : 0;
+      const auto& entry = leaf_.entry[k][static_cast<std::size_t>(at[k])];
+      leaf_.p[k] = entry.p;
+      mask[k] = entry.mask;
+      where[k] = entry.where;
     }
     // A tet of the leaf is determined by its local points and, for the leaf's vertices, the
     // positions they take: its verdict is kept for the leaf's other combinations (most
@@ -624,6 +665,12 @@ class Snapper {
     std::array<grid::stencil3::Split, 81> split;
     std::array<std::uint32_t, 81> stamp{};
     std::array<PhaseMask, 81> pair{};
+    struct MenuEntry {
+      Vec3 p{};
+      PhaseMask mask = 0;
+      std::uint32_t where = 0;
+    };
+    std::array<std::array<MenuEntry, kMaxMenu>, 4> entry{};
   };
   LeafData leaf_;
 
@@ -695,8 +742,9 @@ class Snapper {
           for (PhaseMask rest = added; rest != 0; rest &= rest - 1) {
             const int phase = std::countr_zero(rest);
             double d = oracle_.distance_to_phase(nodes_.position[v], phase);
-            if (const auto it = reach_.find(static_cast<std::uint64_t>(v) * 64 + static_cast<std::uint64_t>(phase)); it != reach_.end())
-              d = std::min(d, it->second);
+            if (const std::int32_t at = reach_index_.find(static_cast<std::uint64_t>(v) * 64 + static_cast<std::uint64_t>(phase));
+                at != grid::KeyMap::kNone)
+              d = std::min(d, reach_[static_cast<std::size_t>(at)]);
             nodes_.max_collapse_deviation = std::max(nodes_.max_collapse_deviation, d);
           }
           nodes_.mask[v] = option.mask;
