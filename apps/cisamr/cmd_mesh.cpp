@@ -45,8 +45,6 @@ void check_explode(const MeshArgs& args, const driver::Output& output) {
     throw InputError("--explode", "", "writes one .vtu file: give -o NAME.vtu (with --gather in a parallel run)");
 }
 
-constexpr int kStreamedPartitionsPerRank = 8;
-
 // Whether --stream writes one Gmsh or Abaqus file (else .pvtu pieces).
 bool streams_one_file(const MeshArgs& args) {
   const std::string format =
@@ -88,8 +86,12 @@ void run_mesh(MeshArgs& args, const GlobalFlags& flags, int& exit_code) {
   options.progress = ranks.get();
   if (args.stream) {
     parallel::run_collectively(comm, [&] { check_stream(args); });
-    // Eight partitions per rank unless told: each rank then holds an eighth of its share.
-    if (options.partitions == 0) options.partitions = kStreamedPartitionsPerRank * comm.size();
+    // Unless told: the fewest partitions, at least two per rank, whose share fits in memory
+    // (the driver chooses them from the scene).
+    if (options.partitions == 0) {
+      options.partitions = 2 * comm.size();
+      options.stream_fewest_partitions = true;
+    }
   }
   // Fail on a bad output name before any work.
   // A streamed .msh or .inp is one file, written on rank 0 from every partition's chunks (as --gather's).
@@ -185,7 +187,7 @@ void add_mesh_command(CLI::App& app, GlobalFlags& flags, int& exit_code) {
   cmd->add_option("--max-elements", args->options.max_elements,
                   "The most elements held in memory (default: what this machine's memory holds at 130 bytes "
                   "per element). A larger estimate is refused, or streamed when the output is .pvtu pieces; a "
-                  "streamed run holds about 6 of its partitions' worth at a time")
+                  "streamed run holds one partition and its ghost per rank at a time")
       ->check(number_in(1, 1e15));
   cmd->add_flag("--cohesive", args->options.pipeline.cohesive,
                 "Zero-thickness cohesive elements on every interface between phases (COH2D4/COH3D6 in .inp, "
@@ -196,7 +198,7 @@ void add_mesh_command(CLI::App& app, GlobalFlags& flags, int& exit_code) {
       ->check(number_in(1, 1e6));
   cmd->add_flag("--stream", args->stream,
                 "Write the mesh while meshing, partition by partition, holding one partition per rank at a time "
-                "(default --partitions: 8 per rank): .pvtu (one piece per partition, global node ids) or one Gmsh "
+                "(default --partitions: the fewest, at least 2 per rank, whose share fits in memory): .pvtu (one piece per partition, global node ids) or one Gmsh "
                 ".msh or Abaqus .inp (each partition's nodes and elements written as it is done, joined on rank 0)");
   cmd->add_flag("--gather", args->gather,
                 "Parallel run: write one file on rank 0 (any format) instead of .pvtu pieces");

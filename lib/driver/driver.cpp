@@ -21,6 +21,7 @@
 #include "mesh/periodic_links.hpp"
 #include "parallel/checksum.hpp"
 #include "parallel/collective.hpp"
+#include "parallel/ghost.hpp"
 #include "parallel/merge.hpp"
 #include "parallel/periodic_masters.hpp"
 #include "parallel/stream.hpp"
@@ -48,31 +49,66 @@ double elements_in_memory(const Options& options) {
   return options.max_elements > 0 ? options.max_elements : physical_memory() / kBytesPerElement;
 }
 
+// The share of the whole mesh in memory at once when `ranks` ranks (all assumed on this
+// machine) stream `partitions` partitions, each rank one at a time: a partition is about
+// 1/partitions of the elements (the partitioner balances them), grown by the widest ghost
+// on every side (3D: ghost_margin3(0) coarse cubes, 2D: kDefaultGhostCells). 1 when not
+// streamed. (A constant "6 partitions' worth" before: E4's 8 partitions on 2 ranks, 4.6 GiB,
+// were refused as 45 GB.)
+template <int Dim>
+double coarse_cells(const geometry::SceneDesc& scene) {
+  double cells = 1;
+  for (std::size_t d = 0; d < Dim; ++d)
+    cells *= std::max(1.0, std::round((scene.domain_max[d] - scene.domain_min[d]) / scene.h));
+  return cells;
+}
+
+template <int Dim>
+double streamed_share(const geometry::SceneDesc& scene, int partitions, int ranks) {
+  if (partitions <= 0) return 1.0;
+  const double cells = coarse_cells<Dim>(scene);
+  const double side = std::pow(cells / partitions, 1.0 / Dim);
+  const double ghost = Dim == 3 ? parallel::ghost_margin3(0) : parallel::kDefaultGhostCells;
+  const double grown = std::min(cells, std::pow(side + 2 * ghost, Dim));
+  return std::min(1.0, ranks * grown / cells);
+}
+
+// The fewest partitions to stream over (a multiple of the ranks, at least two per rank and
+// at least `least`) whose share held at once fits in memory: every partition more adds
+// ghost to mesh (E4 on 2 ranks: 8 partitions 238 s, 16 partitions 312 s).
+template <int Dim>
+int fewest_streamed_partitions(const geometry::SceneDesc& scene, const pipeline::MeshEstimate& estimate,
+                               const Options& options, int ranks, int least) {
+  const double fits = elements_in_memory(options);
+  int partitions = std::max(2 * ranks, least);
+  partitions = (partitions + ranks - 1) / ranks * ranks;
+  // Never more than the coarse cells (check_request refuses what still does not fit).
+  while (partitions + ranks <= std::min<double>(coarse_cells<Dim>(scene), 1 << 20) &&
+         estimate.total() * streamed_share<Dim>(scene, partitions, ranks) > fits)
+    partitions += ranks;
+  return partitions;
+}
+
 // With Options::stream_if_needed: the partitions to stream over when the mesh would not fit
-// (each of `ranks` holding one partition, its ghost included, at a time), 0 when it fits or
-// cannot be streamed.
+// (fewest_streamed_partitions), 0 when it fits or cannot be streamed.
+template <int Dim>
 int partitions_to_stream(const geometry::SceneDesc& scene, const pipeline::MeshEstimate& estimate, const Options& options,
                          int ranks) {
   if (options.stream_if_needed.empty() || !options.stream.empty()) return 0;
   if (options.pipeline.cohesive || scene.any_periodic()) return 0;
-  const double elements = estimate.total();
-  const double fits = elements_in_memory(options);
-  if (elements <= fits) return 0;
-  const double needed = std::ceil(kStreamedPartitionsInFlight * elements / fits) * ranks;
-  return static_cast<int>(std::max<double>({needed, 8.0 * ranks, static_cast<double>(options.partitions)}));
+  if (estimate.total() <= elements_in_memory(options)) return 0;
+  return fewest_streamed_partitions<Dim>(scene, estimate, options, ranks, options.partitions);
 }
 
 // Refuses, before any memory is taken, a mesh estimated above Options::max_elements, and
 // more partitions than coarse cells. Throws InputError naming the scene's field.
 template <int Dim>
-void check_request(const geometry::SceneDesc& scene, const pipeline::MeshEstimate& estimate, const Options& options) {
+void check_request(const geometry::SceneDesc& scene, const pipeline::MeshEstimate& estimate, const Options& options,
+                   int ranks) {
   const double memory = physical_memory();
   // Streamed, a rank holds one partition at a time (its ghost included).
-  const double streamed_share =
-      options.stream.empty() || options.partitions <= 0
-          ? 1.0
-          : std::min(1.0, kStreamedPartitionsInFlight / static_cast<double>(options.partitions));
-  const double limit = elements_in_memory(options) / streamed_share;
+  const double share = options.stream.empty() ? 1.0 : streamed_share<Dim>(scene, options.partitions, ranks);
+  const double limit = elements_in_memory(options) / share;
   if (estimate.total() > limit) {
     std::string field = "mesh.h";
     if (estimate.background <= limit && estimate.largest_inclusion >= 0) {
@@ -90,8 +126,7 @@ void check_request(const geometry::SceneDesc& scene, const pipeline::MeshEstimat
                                                  : " (more --partitions hold less at a time; --max-elements overrides)"));
   }
   if (options.partitions > 0) {
-    double cells = 1;
-    for (std::size_t d = 0; d < Dim; ++d) cells *= std::round((scene.domain_max[d] - scene.domain_min[d]) / scene.h);
+    const double cells = coarse_cells<Dim>(scene);
     if (options.partitions > cells)
       throw InputError(scene.source, "", "--partitions " + std::to_string(options.partitions) +
                                              ": more partitions than the scene's " + std::to_string(static_cast<long long>(cells)) +
@@ -258,9 +293,13 @@ std::variant<MeshRun<2>, MeshRun<3>> mesh_scene(const Comm& comm, const std::str
     run.bound = options.bound > 0 ? options.bound : Dim == 2 ? 3.0 : 5.0;
     pipeline::MeshEstimate estimate;  // the same on every rank: from the descriptors
     parallel::run_collectively(comm, [&] { estimate = pipeline::estimate_mesh<Dim>(scene); });
+    if (!options.stream.empty() && options.stream_fewest_partitions)
+      parallel::run_collectively(comm, [&] {
+        run.options.partitions = fewest_streamed_partitions<Dim>(scene, estimate, options, comm.size(), options.partitions);
+      });
     if (distributed) {
       int partitions = 0;
-      parallel::run_collectively(comm, [&] { partitions = partitions_to_stream(scene, estimate, options, comm.size()); });
+      parallel::run_collectively(comm, [&] { partitions = partitions_to_stream<Dim>(scene, estimate, options, comm.size()); });
       if (partitions > 0) {
         run.options.stream = options.stream_if_needed;
         run.options.partitions = partitions;
@@ -269,7 +308,7 @@ std::variant<MeshRun<2>, MeshRun<3>> mesh_scene(const Comm& comm, const std::str
                    " held in memory: streamed over " + std::to_string(partitions) + " partitions (--stream)";
       }
     }
-    parallel::run_collectively(comm, [&] { check_request<Dim>(scene, estimate, run.options); });
+    parallel::run_collectively(comm, [&] { check_request<Dim>(scene, estimate, run.options, comm.size()); });
     try {
       run.face_box = face_box<Dim>(scene, options.pipeline);  // builds the lattice: may refuse the scene
       const grid::Lattice<Dim> lattice = pipeline::make_lattice<Dim>(scene, options.pipeline);

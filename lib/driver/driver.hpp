@@ -29,6 +29,10 @@ struct Options {
   // partitions one after another on each rank; empty: the mesh is assembled in memory and
   // written after.
   std::string stream;
+  // With `stream`: `partitions` is only the least (the command line's default when none is
+  // asked): the run takes the fewest partitions, at least that many and a multiple of the
+  // ranks, whose share held at once fits in memory (each partition more adds ghost to mesh).
+  bool stream_fewest_partitions = false;
   // The .pvtu a parallel run writes when it is asked for pieces (or its --gather .msh or
   // .inp): the mesh is streamed there when its estimate would not fit in memory (and it can
   // be streamed), instead of refused.
@@ -52,9 +56,6 @@ struct Options {
 // Peak memory of a run per element, measured on the examples (about 60 bytes in 2D, 95
 // in 3D: validation/bench/MEMORY.md), with a margin.
 inline constexpr double kBytesPerElement = 130;
-// A streamed run holds one partition per rank at a time: with its ghost (at most a few
-// times its box) about this many partitions' worth of the mesh.
-inline constexpr double kStreamedPartitionsInFlight = 6;
 
 // Whether `options` ask for the parallel mesher on `comm`.
 bool is_distributed(const Comm& comm, const Options& options);

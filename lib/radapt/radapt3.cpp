@@ -212,7 +212,7 @@ class Snapper {
   void find_edges() {
     nodes_.cut_leaf_slot.assign(forest_.size(), -1);
     // (lo, hi) → index into nodes_.edges, while they are found. Open addressing: a
-    // std::unordered_map spent a tenth of radapt allocating nodes and rehashing.
+    // std::unordered_map allocated a node per edge and rehashed them as it grew.
     grid::OpenKeyMap<std::pair<LatticeKey3, LatticeKey3>, EdgeKeyHash> index(forest_.size() / 32 + 16);
     for (std::int32_t t = 0; t < static_cast<std::int32_t>(forest_.size()); ++t) {
       tet_done(1, t);

@@ -237,7 +237,8 @@ sys.exit(0 if abs(a - b) <= 1e-9 * abs(b) else 1)' "$dir/fe-s.json" "$dir/fe-seq
     run_mpi 2 "$cisamr" mesh "$scene" -o "$dir/$name-2.pvtu" --stream --report "$dir/$name-2.json" -q ||
       fail "$name: 2 ranks --stream, default partitions"
     [ "$(checksum "$dir/$name-2.json")" = "$ref" ] || fail "$name: 2 ranks --stream checksum differs"
-    [ "$(ls "$dir" | grep -c "^$name-2_[0-9]*\.vtu$")" = 16 ] || fail "$name: default is not 8 partitions per rank"
+    # Default partitions: the fewest whose share fits in memory, at least two per rank.
+    [ "$(ls "$dir" | grep -c "^$name-2_[0-9]*\.vtu$")" = 4 ] || fail "$name: default is not 2 partitions per rank"
   fi
 done
 
@@ -277,7 +278,14 @@ EOF
   --report "$dir/auto.json" > /dev/null 2> "$dir/auto.err" || fail "automatic stream: $(cat "$dir/auto.err")"
 grep -q "streamed over [0-9]* partitions" "$dir/auto.err" || fail "automatic stream: no note ($(cat "$dir/auto.err"))"
 [ "$(checksum "$dir/auto.json")" = "$(checksum "$dir/composite-seq.json")" ] || fail "automatic stream: checksum differs"
-[ "$(ls "$dir" | grep -c '^auto_[0-9]*\.vtu$')" -ge 8 ] || fail "automatic stream: fewer than 8 pieces"
+# The fewest partitions (at least two) whose share in memory fits: here 5 (one fewer, 4,
+# would hold 0.34 of the 7.1e4 estimated elements at once, 2.4e4, above 2e4).
+grep -q "streamed over 5 partitions" "$dir/auto.err" || fail "automatic stream: not 5 partitions ($(cat "$dir/auto.err"))"
+[ "$(ls "$dir" | grep -c '^auto_[0-9]*\.vtu$')" = 5 ] || fail "automatic stream: not one piece per partition"
+# --stream without --partitions takes the same fewest partitions.
+"$cisamr" mesh "$examples/composite.json" -o "$dir/fewest.pvtu" --stream --max-elements 20000 -q ||
+  fail "--stream, default partitions under --max-elements"
+[ "$(ls "$dir" | grep -c '^fewest_[0-9]*\.vtu$')" = 5 ] || fail "--stream under --max-elements: not 5 partitions"
 if [ -n "$mpiexec" ]; then  # one .msh of a parallel run (--gather) beyond memory: streamed as well
   run_mpi 2 "$cisamr" mesh "$examples/composite.json" -o "$dir/auto.msh" --gather --max-elements 20000 \
     --report "$dir/auto-msh.json" > /dev/null 2> "$dir/auto-msh.err" || fail "automatic .msh stream: $(cat "$dir/auto-msh.err")"
@@ -305,6 +313,9 @@ refused "--svg" "$examples/composite.json" -o "$dir/bad/x.pvtu" --stream --svg "
 refused "--cohesive" "$examples/composite.json" -o "$dir/bad/x.pvtu" --stream --cohesive
 refused "periodic" "$examples/rve3d.json" -o "$dir/bad/x.pvtu" --stream
 refused "beyond --max-elements, one file" "$examples/composite.json" -o "$dir/bad/x.vtu" --max-elements 20000
+# Two partitions hold 0.62 of the 7.1e4 estimated elements at once: above 2e4.
+refused "too few partitions for --max-elements" "$examples/composite.json" -o "$dir/bad/x.pvtu" --stream --partitions 2 \
+  --max-elements 20000
 # A failure after meshing, while the pieces are written (piece 3's path is a directory):
 # exit 2 naming it, and no piece, .pvtu, spool or report left, on 1 rank and on 3 (the
 # piece then belongs to rank 1).
