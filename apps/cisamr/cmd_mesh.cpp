@@ -86,10 +86,10 @@ void run_mesh(MeshArgs& args, const GlobalFlags& flags, int& exit_code) {
   options.progress = ranks.get();
   if (args.stream) {
     parallel::run_collectively(comm, [&] { check_stream(args); });
-    // Unless told: the fewest partitions, at least two per rank, whose share fits in memory
+    // Unless told: the fewest partitions, at least 8 per rank, whose share fits in memory
     // (the driver chooses them from the scene).
     if (options.partitions == 0) {
-      options.partitions = 2 * comm.size();
+      options.partitions = driver::kStreamedPartitionsPerRank * comm.size();
       options.stream_fewest_partitions = true;
     }
   }
@@ -198,7 +198,7 @@ void add_mesh_command(CLI::App& app, GlobalFlags& flags, int& exit_code) {
       ->check(number_in(1, 1e6));
   cmd->add_flag("--stream", args->stream,
                 "Write the mesh while meshing, partition by partition, holding one partition per rank at a time "
-                "(default --partitions: the fewest, at least 2 per rank, whose share fits in memory): .pvtu (one piece per partition, global node ids) or one Gmsh "
+                "(default --partitions: 8 per rank, more if their share would not fit in memory): .pvtu (one piece per partition, global node ids) or one Gmsh "
                 ".msh or Abaqus .inp (each partition's nodes and elements written as it is done, joined on rank 0)");
   cmd->add_flag("--gather", args->gather,
                 "Parallel run: write one file on rank 0 (any format) instead of .pvtu pieces");

@@ -73,14 +73,13 @@ double streamed_share(const geometry::SceneDesc& scene, int partitions, int rank
   return std::min(1.0, ranks * grown / cells);
 }
 
-// The fewest partitions to stream over (a multiple of the ranks, at least two per rank and
-// at least `least`) whose share held at once fits in memory: every partition more adds
-// ghost to mesh (E4 on 2 ranks: 8 partitions 238 s, 16 partitions 312 s).
+// The partitions to stream over: the fewest, a multiple of the ranks and at least
+// max(kStreamedPartitionsPerRank per rank, `least`), whose share held at once fits in memory.
 template <int Dim>
 int fewest_streamed_partitions(const geometry::SceneDesc& scene, const pipeline::MeshEstimate& estimate,
                                const Options& options, int ranks, int least) {
   const double fits = elements_in_memory(options);
-  int partitions = std::max(2 * ranks, least);
+  int partitions = std::max(kStreamedPartitionsPerRank * ranks, least);
   partitions = (partitions + ranks - 1) / ranks * ranks;
   // Never more than the coarse cells (check_request refuses what still does not fit).
   while (partitions + ranks <= std::min<double>(coarse_cells<Dim>(scene), 1 << 20) &&

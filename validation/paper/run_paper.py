@@ -24,8 +24,8 @@ at h = 1 give 9.7 M and 4.3 M triangles; h = 0.5 gives the paper's counts).
 E4: --e4-h sets its background size (default 8: about 90 M tetrahedra in memory; 800/144
 gives the paper's count, about 186 M, which needs --stream e4) and meshes it with
 --extra-levels 0, as validation/paper3 does. --stream EXAMPLES runs those with
-`--stream` (one piece per partition; as many partitions as the driver chooses: the fewest,
-at least two per rank, whose share fits in memory): their memory is one partition per rank.
+`--stream` (one piece per partition, 8 partitions per rank unless their share would not
+fit in memory): their memory is one partition per rank.
 Each run is a separate process: a failure (exit code, out of memory) is reported in its row
 and the others go on.
 """
