@@ -197,5 +197,44 @@ TEST(AspectStatistics, RatiosEqualTheMetricBitForBit) {
   }
 }
 
+// The guard's test (radapt3) decides "positive and aspect ratio within the bound" first
+// without square roots; its verdict must be the full test's, also for tets right at the
+// bound (scaled so that their ratio is the bound up to round-off).
+TEST(PositiveWithin, SameVerdictAsTheFullTest) {
+  const auto full = [](const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d, double bound) {
+    const auto sub = [](const Vec3& x, const Vec3& y) { return Vec3{x[0] - y[0], x[1] - y[1], x[2] - y[2]}; };
+    const auto cross_norm = [](const Vec3& x, const Vec3& y) {
+      const double p = x[1] * y[2] - x[2] * y[1], q = x[2] * y[0] - x[0] * y[2], r = x[0] * y[1] - x[1] * y[0];
+      return std::sqrt(p * p + q * q + r * r);
+    };
+    const Vec3 u = sub(b, a), v = sub(c, a), w = sub(d, a), bc = sub(c, b), bd = sub(d, b), cd = sub(d, c);
+    const double six_volume = u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0]) +
+                              u[2] * (v[0] * w[1] - v[1] * w[0]);
+    if (!(six_volume > 0)) return false;
+    const double faces = 0.5 * (cross_norm(u, v) + cross_norm(u, w) + cross_norm(v, w) + cross_norm(bc, bd));
+    const auto sq = [](const Vec3& x) { return x[0] * x[0] + x[1] * x[1] + x[2] * x[2]; };
+    const double l2 = std::max({sq(u), sq(v), sq(w), sq(bc), sq(bd), sq(cd)});
+    return std::sqrt(l2) * faces <= bound * (1 - 1e-9) * std::sqrt(6.0) * six_volume;
+  };
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> coordinate(-1.0, 1.0);
+  int accepted = 0, refused = 0;
+  for (int trial = 0; trial < 20000; ++trial) {
+    std::array<Vec3, 4> p;
+    for (Vec3& x : p)
+      for (int d = 0; d < 3; ++d) x[d] = coordinate(rng);
+    const double ratio = mesh::aspect_ratio(p[0], p[1], p[2], p[3]);
+    // Half the trials at the tet's own ratio as the bound (within round-off of it either
+    // way), the others at fixed bounds.
+    for (const double bound : {ratio * (1 + 1e-9 * (trial % 3 - 1)), 2.0, 5.0}) {
+      const bool expected = full(p[0], p[1], p[2], p[3], bound);
+      ASSERT_EQ(mesh::positive_within(p[0], p[1], p[2], p[3], bound), expected) << "trial " << trial;
+      (expected ? accepted : refused) += 1;
+    }
+  }
+  EXPECT_GT(accepted, 1000);
+  EXPECT_GT(refused, 1000);
+}
+
 }  // namespace
 }  // namespace cisamr::quality
