@@ -198,8 +198,9 @@ void add_mesh_command(CLI::App& app, GlobalFlags& flags, int& exit_code) {
       ->check(number_in(1, 1e6));
   cmd->add_flag("--stream", args->stream,
                 "Write the mesh while meshing, partition by partition, holding one partition per rank at a time "
-                "(default --partitions: 8 per rank, more if their share would not fit in memory): .pvtu (one piece per partition, global node ids) or one Gmsh "
-                ".msh or Abaqus .inp (each partition's nodes and elements written as it is done, joined on rank 0)");
+                "(default --partitions: 8 per rank, more if their share would not fit in memory): .pvtu (one "
+                "piece per partition, global node ids) or one Gmsh .msh or Abaqus .inp (each partition's nodes "
+                "and elements written as it is done, joined on rank 0)");
   cmd->add_flag("--gather", args->gather,
                 "Parallel run: write one file on rank 0 (any format) instead of .pvtu pieces");
   cmd->add_flag("--fixed-ghost", args->fixed_ghost,

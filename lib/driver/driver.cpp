@@ -49,12 +49,7 @@ double elements_in_memory(const Options& options) {
   return options.max_elements > 0 ? options.max_elements : physical_memory() / kBytesPerElement;
 }
 
-// The share of the whole mesh in memory at once when `ranks` ranks (all assumed on this
-// machine) stream `partitions` partitions, each rank one at a time: a partition is about
-// 1/partitions of the elements (the partitioner balances them), grown by the widest ghost
-// on every side (3D: ghost_margin3(0) coarse cubes, 2D: kDefaultGhostCells). 1 when not
-// streamed. (A constant "6 partitions' worth" before: E4's 8 partitions on 2 ranks, 4.6 GiB,
-// were refused as 45 GB.)
+// The scene's coarse cells (domain / mesh.h).
 template <int Dim>
 double coarse_cells(const geometry::SceneDesc& scene) {
   double cells = 1;
@@ -63,6 +58,12 @@ double coarse_cells(const geometry::SceneDesc& scene) {
   return cells;
 }
 
+// The share of the whole mesh in memory at once when `ranks` ranks (all assumed on this
+// machine) stream `partitions` partitions, each rank one at a time: a partition is about
+// 1/partitions of the elements (the partitioner balances them), grown by the widest ghost
+// on every side (3D: ghost_margin3(0) coarse cubes, 2D: kDefaultGhostCells). 1 when not
+// streamed. (A constant "6 partitions' worth" before: E4's 8 partitions on 2 ranks, 4.6 GiB,
+// were refused as 45 GB.)
 template <int Dim>
 double streamed_share(const geometry::SceneDesc& scene, int partitions, int ranks) {
   if (partitions <= 0) return 1.0;
