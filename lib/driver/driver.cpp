@@ -49,15 +49,6 @@ double elements_in_memory(const Options& options) {
   return options.max_elements > 0 ? options.max_elements : physical_memory() / kBytesPerElement;
 }
 
-// The scene's coarse cells (domain / mesh.h).
-template <int Dim>
-double coarse_cells(const geometry::SceneDesc& scene) {
-  double cells = 1;
-  for (std::size_t d = 0; d < Dim; ++d)
-    cells *= std::max(1.0, std::round((scene.domain_max[d] - scene.domain_min[d]) / scene.h));
-  return cells;
-}
-
 // The share of the whole mesh in memory at once when `ranks` ranks (all assumed on this
 // machine) stream `partitions` partitions, each rank one at a time: a partition is about
 // 1/partitions of the elements (the partitioner balances them), grown by the widest ghost
@@ -67,7 +58,7 @@ double coarse_cells(const geometry::SceneDesc& scene) {
 template <int Dim>
 double streamed_share(const geometry::SceneDesc& scene, int partitions, int ranks) {
   if (partitions <= 0) return 1.0;
-  const double cells = coarse_cells<Dim>(scene);
+  const double cells = pipeline::coarse_cells<Dim>(scene);
   const double side = std::pow(cells / partitions, 1.0 / Dim);
   const double ghost = Dim == 3 ? parallel::ghost_margin3(0) : parallel::kDefaultGhostCells;
   const double grown = std::min(cells, std::pow(side + 2 * ghost, Dim));
@@ -83,7 +74,7 @@ int fewest_streamed_partitions(const geometry::SceneDesc& scene, const pipeline:
   int partitions = std::max(kStreamedPartitionsPerRank * ranks, least);
   partitions = (partitions + ranks - 1) / ranks * ranks;
   // Never more than the coarse cells (check_request refuses what still does not fit).
-  while (partitions + ranks <= std::min<double>(coarse_cells<Dim>(scene), 1 << 20) &&
+  while (partitions + ranks <= std::min<double>(pipeline::coarse_cells<Dim>(scene), 1 << 20) &&
          estimate.total() * streamed_share<Dim>(scene, partitions, ranks) > fits)
     partitions += ranks;
   return partitions;
@@ -126,7 +117,7 @@ void check_request(const geometry::SceneDesc& scene, const pipeline::MeshEstimat
                                                  : " (more --partitions hold less at a time; --max-elements overrides)"));
   }
   if (options.partitions > 0) {
-    const double cells = coarse_cells<Dim>(scene);
+    const double cells = pipeline::coarse_cells<Dim>(scene);
     if (options.partitions > cells)
       throw InputError(scene.source, "", "--partitions " + std::to_string(options.partitions) +
                                              ": more partitions than the scene's " + std::to_string(static_cast<long long>(cells)) +

@@ -46,17 +46,24 @@ inline double triangle_area_3d(const Vec3& a, const Vec3& b, const Vec3& c) {
   return 0.5 * std::sqrt(x * x + y * y + z * z);
 }
 
-inline double aspect_ratio(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
+// The aspect ratio of tetrahedron (a, b, c, d) given the sum of its face areas, in the
+// order area(bcd) + area(acd) + area(abd) + area(abc) (quality's statistics pass the areas
+// of the cross products they compute for the dihedral angles: the same value, bit for bit).
+inline double aspect_ratio_with_faces(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d, double faces) {
   const double volume = std::abs(signed_volume(a, b, c, d));
   if (!(volume > 0)) return std::numeric_limits<double>::infinity();
-  const double faces = triangle_area_3d(b, c, d) + triangle_area_3d(a, c, d) +
-                       triangle_area_3d(a, b, d) + triangle_area_3d(a, b, c);
   const double r_in = 3.0 * volume / faces;
   const auto sq = [](const Vec3& x, const Vec3& y) {
     return (x[0] - y[0]) * (x[0] - y[0]) + (x[1] - y[1]) * (x[1] - y[1]) + (x[2] - y[2]) * (x[2] - y[2]);
   };
   const double l_max = std::sqrt(std::max({sq(a, b), sq(a, c), sq(a, d), sq(b, c), sq(b, d), sq(c, d)}));
   return l_max / (2.0 * std::sqrt(6.0) * r_in);
+}
+
+inline double aspect_ratio(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
+  return aspect_ratio_with_faces(a, b, c, d,
+                                 triangle_area_3d(b, c, d) + triangle_area_3d(a, c, d) + triangle_area_3d(a, b, d) +
+                                     triangle_area_3d(a, b, c));
 }
 
 // Is tetrahedron (a, b, c, d) positively oriented with aspect_ratio(a, b, c, d) ≤ bound?

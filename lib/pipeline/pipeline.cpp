@@ -45,15 +45,22 @@ grid::Lattice<Dim> make_lattice(const geometry::SceneDesc& scene, const Options&
 }
 
 template <int Dim>
+double coarse_cells(const geometry::SceneDesc& scene) {
+  double cells = 1;
+  for (std::size_t d = 0; d < Dim; ++d) cells *= std::round((scene.domain_max[d] - scene.domain_min[d]) / scene.h);
+  return cells;
+}
+template double coarse_cells<2>(const geometry::SceneDesc&);
+template double coarse_cells<3>(const geometry::SceneDesc&);
+
+template <int Dim>
 MeshEstimate estimate_mesh(const geometry::SceneDesc& scene) {
   // Calibrated on the examples: about 2 triangles per square, 6 tetrahedra per cube, and a
   // band of refined cells 3 wide along an interface, its coarser levels adding as much again.
   constexpr double kPerCell = Dim == 2 ? 2.0 : 6.0;
   constexpr double kBand = 2 * 3 * kPerCell;
   MeshEstimate estimate;
-  double cells = 1;
-  for (std::size_t d = 0; d < Dim; ++d) cells *= std::round((scene.domain_max[d] - scene.domain_min[d]) / scene.h);
-  estimate.background = kPerCell * cells;
+  estimate.background = kPerCell * coarse_cells<Dim>(scene);
   double largest = 0;
   const std::vector<Box3> boxes = holding_boxes(scene);  // empty for an STL surface not loaded
   for (std::size_t k = 0; k < scene.inclusions.size(); ++k) {

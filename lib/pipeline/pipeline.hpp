@@ -64,6 +64,10 @@ struct Result {
   PhaseTimes times;  // per stage: samr, radapt, (faceswap,) subdivide, assemble
 };
 
+// The scene's coarse cells: the domain's extent over mesh.h, per axis rounded, multiplied.
+template <int Dim>
+double coarse_cells(const geometry::SceneDesc& scene);
+
 // The global lattice of a scene: coarse cells of size h over the domain and
 // Lmax = max(requested levels) + extra_levels. Throws InputError when h exceeds the
 // domain, and (3D) MeshingError when the lattice does not fit the 64-bit key.

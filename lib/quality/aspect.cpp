@@ -40,7 +40,7 @@ void add_triangle_angles(const Vec2& a, const Vec2& b, const Vec2& c, AngleRange
 // mesh::aspect_ratio(p[0], p[1], p[2], p[3]): the faces' cross products serve both (each
 // face area there is half the norm of the same cross product, up to an exact sign flip,
 // summed in the same order), which saves a third of the statistics' time.
-double add_dihedral_angles(const Vec3* p, AngleRange& r) {
+double add_dihedral_angles_and_aspect(const Vec3* p, AngleRange& r) {
   // Outward normal of the face opposite vertex i (unnormalised).
   static constexpr int kFace[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
   double n[4][3], len2[4];
@@ -65,17 +65,9 @@ double add_dihedral_angles(const Vec3* p, AngleRange& r) {
       r.add(-(n[k][0] * n[l][0] + n[k][1] * n[l][1] + n[k][2] * n[l][2]) /
             std::sqrt(len2[k] * len2[l]));
     }
-  const double volume = std::abs(mesh::signed_volume(p[0], p[1], p[2], p[3]));
-  if (!(volume > 0)) return std::numeric_limits<double>::infinity();
-  const double faces = 0.5 * std::sqrt(len2[0]) + 0.5 * std::sqrt(len2[1]) + 0.5 * std::sqrt(len2[2]) +
-                       0.5 * std::sqrt(len2[3]);
-  const double r_in = 3.0 * volume / faces;
-  const auto sq = [](const Vec3& x, const Vec3& y) {
-    return (x[0] - y[0]) * (x[0] - y[0]) + (x[1] - y[1]) * (x[1] - y[1]) + (x[2] - y[2]) * (x[2] - y[2]);
-  };
-  const double l_max = std::sqrt(std::max({sq(p[0], p[1]), sq(p[0], p[2]), sq(p[0], p[3]), sq(p[1], p[2]),
-                                           sq(p[1], p[3]), sq(p[2], p[3])}));
-  return l_max / (2.0 * std::sqrt(6.0) * r_in);
+  return mesh::aspect_ratio_with_faces(p[0], p[1], p[2], p[3],
+                                       0.5 * std::sqrt(len2[0]) + 0.5 * std::sqrt(len2[1]) +
+                                           0.5 * std::sqrt(len2[2]) + 0.5 * std::sqrt(len2[3]));
 }
 
 // Orders the heap so that its top is the *least* bad of the kept cells.
@@ -132,7 +124,7 @@ AspectStats aspect_statistics(const mesh::SimplexMesh<Dim>& m, double bound, int
         add_triangle_angles(m.point(cn[0]), m.point(cn[1]), m.point(cn[2]), angles);
       } else {
         const Vec3 p[4] = {m.point(cn[0]), m.point(cn[1]), m.point(cn[2]), m.point(cn[3])};
-        ar = add_dihedral_angles(p, angles);
+        ar = add_dihedral_angles_and_aspect(p, angles);
       }
     }
     if (cell_aspect_ratio != nullptr) (*cell_aspect_ratio)[c] = ar;
