@@ -30,11 +30,14 @@
 #include <array>
 #include <cstdint>
 #include <map>
+#include <memory>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
 #include "geometry/scene.hpp"
+#include "io/atomic_file.hpp"
 #include "mesh/simplex_mesh.hpp"
 
 namespace cisamr::io {
@@ -92,6 +95,26 @@ void write_mesh(const std::string& path, const mesh::SimplexMesh<Dim>& m,
 template <int Dim>
 void write_vtu(const std::string& path, const mesh::SimplexMesh<Dim>& m,
                const std::vector<geometry::Phase>& phases, const MeshWriteOptions& options = {});
+
+// A .vtu written before its nodes' global ids are known (a streamed partition's piece, whose
+// ids come after every partition is meshed): the constructor writes everything but the
+// global_id block, the file's last, to the temporary; finish() appends the ids (one per
+// node, in the mesh's order) and commits. Without finish() nothing appears. The same bytes
+// as write_vtu of the mesh with those ids.
+class VtuAwaitingIds {
+ public:
+  template <int Dim>
+  VtuAwaitingIds(const std::string& path, const mesh::SimplexMesh<Dim>& m, const std::vector<geometry::Phase>& phases,
+                 const MeshWriteOptions& options = {});
+  VtuAwaitingIds(VtuAwaitingIds&&) noexcept;
+  VtuAwaitingIds& operator=(VtuAwaitingIds&&) noexcept;
+  ~VtuAwaitingIds();
+  void finish(std::span<const GlobalId> ids);
+
+ private:
+  std::unique_ptr<AtomicFile> file_;
+  std::size_t nodes_ = 0;
+};
 
 // The .pvtu text listing `pieces` (file names relative to the .pvtu), declaring the arrays
 // write_vtu writes (`periodic`: the pieces have periodic_master, as write_vtu writes it for

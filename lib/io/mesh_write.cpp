@@ -233,9 +233,10 @@ std::string phase_name_bytes(const std::vector<geometry::Phase>& phases, std::si
   return text;
 }
 
+// A .vtu but for its last block, the global ids, and the closing tags (write_vtu_ids).
 template <int Dim>
-void write_vtu_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m,
-                    const std::vector<geometry::Phase>& phases, const MeshWriteOptions& options) {
+void write_vtu_without_ids(AtomicFile& file, const mesh::SimplexMesh<Dim>& m,
+                           const std::vector<geometry::Phase>& phases, const MeshWriteOptions& options) {
   constexpr int kCorners = Dim + 1;
   constexpr int kCohesiveCorners = 2 * Dim;
   const std::size_t nodes = m.node_count(), cells = m.cell_count();
@@ -400,11 +401,28 @@ void write_vtu_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m,
   if (periodic) write_array_raw(file, periodic_master);
   if (cohesive_arrays) write_array_raw(file, m.node_phase);
   write_array_raw(file, boundary_sets_for(m, options).node_faces);
-  if (m.node_global_id.empty())
-    write_array_chunked<std::int64_t>(file, nodes, [](std::size_t i) { return std::int64_t(i); });
-  else
-    write_array_raw(file, m.node_global_id);
-  file.write("\n  </AppendedData>\n</VTKFile>\n");
+}
+
+constexpr std::string_view kVtuEnd = "\n  </AppendedData>\n</VTKFile>\n";
+
+// The global_id block (the last one, see above) and the closing tags.
+void write_vtu_ids(AtomicFile& file, std::span<const GlobalId> ids) {
+  const std::uint64_t bytes = ids.size() * sizeof(GlobalId);
+  file.write(&bytes, sizeof bytes);
+  file.write(ids.data(), bytes);
+  file.write(kVtuEnd);
+}
+
+template <int Dim>
+void write_vtu_file(AtomicFile& file, const mesh::SimplexMesh<Dim>& m,
+                    const std::vector<geometry::Phase>& phases, const MeshWriteOptions& options) {
+  write_vtu_without_ids(file, m, phases, options);
+  if (!m.node_global_id.empty()) {
+    write_vtu_ids(file, m.node_global_id);
+    return;
+  }
+  write_array_chunked<std::int64_t>(file, m.node_count(), [](std::size_t i) { return std::int64_t(i); });
+  file.write(kVtuEnd);
 }
 
 std::string abaqus_label(const std::string& name);
@@ -1239,6 +1257,32 @@ void write_vtu(const std::string& path, const mesh::SimplexMesh<Dim>& m,
   write_vtu_file(file, m, phases, options);
   file.commit();
 }
+
+template <int Dim>
+VtuAwaitingIds::VtuAwaitingIds(const std::string& path, const mesh::SimplexMesh<Dim>& m,
+                               const std::vector<geometry::Phase>& phases, const MeshWriteOptions& options)
+    : nodes_(m.node_count()) {
+  check_mesh(m);
+  file_ = std::make_unique<AtomicFile>(path);
+  write_vtu_without_ids(*file_, m, phases, options);
+  file_->flush();
+}
+VtuAwaitingIds::VtuAwaitingIds(VtuAwaitingIds&&) noexcept = default;
+VtuAwaitingIds& VtuAwaitingIds::operator=(VtuAwaitingIds&&) noexcept = default;
+VtuAwaitingIds::~VtuAwaitingIds() = default;
+
+void VtuAwaitingIds::finish(std::span<const GlobalId> ids) {
+  if (file_ == nullptr) throw std::logic_error("VtuAwaitingIds::finish: already finished");
+  if (ids.size() != nodes_) throw std::invalid_argument("VtuAwaitingIds::finish: one global id per node");
+  write_vtu_ids(*file_, ids);
+  file_->commit();
+  file_.reset();
+}
+
+template VtuAwaitingIds::VtuAwaitingIds(const std::string&, const mesh::Mesh2&, const std::vector<geometry::Phase>&,
+                                        const MeshWriteOptions&);
+template VtuAwaitingIds::VtuAwaitingIds(const std::string&, const mesh::Mesh3&, const std::vector<geometry::Phase>&,
+                                        const MeshWriteOptions&);
 
 template <int Dim>
 void write_mesh(const std::string& path, const mesh::SimplexMesh<Dim>& m,

@@ -66,13 +66,12 @@ template <int Dim>
 mesh::SimplexMesh<Dim> read_back_numbered(std::vector<std::unique_ptr<io::AtomicFile>>& spools,
                                           const std::vector<PartitionFaces<Dim>>& faces,
                                           const StreamNumbering<Dim>& numbering, std::size_t k,
-                                          const PartitionHook<Dim>& on_partition,
-                                          std::vector<double>* cell_aspect_ratio = nullptr) {
+                                          const PartitionHook<Dim>& on_partition) {
   mesh::SimplexMesh<Dim> m = unspool<Dim>(*spools[k]);
   spools[k].reset();  // the temporary is deleted
   m.node_global_id = global_ids_of<Dim>(faces[k], numbering.offset[k], numbering.face_ids[k]);
   m.cell_partition.assign(m.cell_phase.size(), faces[k].partition);
-  if (on_partition) on_partition(m, cell_aspect_ratio);
+  if (on_partition) on_partition(m, nullptr);
   return m;
 }
 
@@ -330,15 +329,27 @@ DistributedMesh<Dim> mesh_streamed(const Comm& comm, geometry::SceneDesc scene, 
     check_streamable(scene, options.pipeline);
   });
   std::vector<PartitionFaces<Dim>> faces;
+  // One file: each partition spooled until the numbering; .pvtu: each piece written at once
+  // but for its global ids, the file's last block, which the numbering gives.
   std::vector<std::unique_ptr<io::AtomicFile>> spools;
+  std::vector<io::VtuAwaitingIds> pieces;
   std::vector<io::MshPartSummary> summaries;
   PhaseTimes spooling;
+  const std::vector<geometry::Phase> phases = scene.phases;
   DistributedMesh<Dim> out =
       mesh_partitions<Dim>(comm, std::move(scene), options, [&](PartitionOutput<Dim>& o, const grid::Lattice<Dim>& lattice) {
+        mesh::SimplexMesh<Dim>& m = o.result.mesh;
+        io::MeshWriteOptions piece_options = write_options;
+        if (!one_file && on_partition) on_partition(m, &piece_options.cell_aspect_ratio);
         ScopedPhase timer(&spooling, "write");
         faces.push_back(partition_faces<Dim>(o, lattice));
-        if (one_file) summaries.push_back(io::msh_part_summary<Dim>(o.result.mesh, write_options));
-        spools.push_back(spool<Dim>(pvtu_path, o.result.mesh));
+        if (one_file) {
+          summaries.push_back(io::msh_part_summary<Dim>(m, write_options));
+          spools.push_back(spool<Dim>(pvtu_path, m));
+        } else {
+          m.cell_partition.assign(m.cell_phase.size(), faces.back().partition);
+          pieces.emplace_back(piece_path(pvtu_path, faces.back().partition), m, phases, piece_options);
+        }
         o.result = pipeline::Result<Dim>{};
       });
   for (const auto& [name, seconds] : spooling.phases()) out.times.add(name, seconds);
@@ -362,12 +373,8 @@ DistributedMesh<Dim> mesh_streamed(const Comm& comm, geometry::SceneDesc scene, 
     return out;
   }
   run_collectively(comm, [&] {
-    for (std::size_t k = 0; k < faces.size(); ++k) {
-      io::MeshWriteOptions piece_options = write_options;
-      const mesh::SimplexMesh<Dim> m =
-          read_back_numbered<Dim>(spools, faces, numbering, k, on_partition, &piece_options.cell_aspect_ratio);
-      io::write_vtu(piece_path(pvtu_path, faces[k].partition), m, out.phases, piece_options);
-    }
+    for (std::size_t k = 0; k < faces.size(); ++k)
+      pieces[k].finish(global_ids_of<Dim>(faces[k], numbering.offset[k], numbering.face_ids[k]));
   });
   run_collectively(comm, [&] {
     if (comm.rank() != 0) return;

@@ -199,6 +199,30 @@ TEST(MeshIo, VtuAspectRatioIsComputedOrTaken) {
   EXPECT_FALSE(std::filesystem::exists(dir.file("c.vtu")));
 }
 
+// A streamed piece: written before its global ids, finished with them, the bytes write_vtu
+// writes for the mesh with those ids; never finished, nothing is left.
+TEST(MeshIo, VtuAwaitingIdsWritesWhatWriteVtuWrites) {
+  TempDir dir;
+  mesh::Mesh3 m = grid_mesh3(2, 2, 1);
+  std::vector<GlobalId> ids(m.node_count());
+  for (std::size_t n = 0; n < ids.size(); ++n) ids[n] = static_cast<GlobalId>(1000 + 7 * n);
+  MeshWriteOptions options;
+  for (std::size_t c = 0; c < m.cell_count(); ++c) options.cell_aspect_ratio.push_back(1.0 + 0.25 * c);
+  m.cell_partition.assign(m.cell_count(), 3);
+  {
+    VtuAwaitingIds piece(dir.file("late.vtu"), m, kPhases, options);
+    EXPECT_FALSE(std::filesystem::exists(dir.file("late.vtu")));
+    EXPECT_THROW(piece.finish(std::span<const GlobalId>(ids).first(ids.size() - 1)), std::invalid_argument);
+    piece.finish(ids);
+    EXPECT_THROW(piece.finish(ids), std::logic_error);
+  }
+  m.node_global_id = ids;
+  write_vtu(dir.file("whole.vtu"), m, kPhases, options);
+  EXPECT_EQ(read_text(dir.file("late.vtu")), read_text(dir.file("whole.vtu")));
+  { VtuAwaitingIds abandoned(dir.file("abandoned.vtu"), m, kPhases, options); }
+  EXPECT_EQ(dir.entries(), (std::vector<std::string>{"late.vtu", "whole.vtu"}));  // no temporary left
+}
+
 TEST(MeshIo, FormatOptionOverridesTheExtension) {
   TempDir dir;
   MeshWriteOptions options;
