@@ -6,8 +6,9 @@
 //          cell data phase (Int32), partition (Int32), aspect_ratio (Float64);
 //          point data global_id (Int64), boundary (UInt8, bit f: on box face f), and for a
 //          periodic mesh periodic_master (Int64: the full master's global id, or -1); points
-//          always with 3 components; field data phase_names (VTK String array, ASCII) and
-//          phase_ids (Int32), in phase-id order.
+//          always with 3 components; field data phase_names (UInt8, ASCII: each name's bytes
+//          then 0; meshio refuses VTK String arrays) and phase_ids (Int32), in phase-id order.
+//          The global_id block is the file's last (VtuAwaitingIds writes it after the rest).
 //   .msh   Gmsh 4.1 ASCII: one physical group and one entity per phase (tag = phase id);
 //          per box face a curve (2D) or surface (3D) entity with its boundary lines or
 //          triangles, in a physical group named XMIN ... ZMAX. Periodic: $Periodic after

@@ -150,7 +150,7 @@ for scene in "$examples/composite.json" "$examples/spheres3d.json"; do
     fail "$name: --stream, 7 partitions"
   [ "$(checksum "$dir/$name-s.json")" = "$ref" ] || fail "$name: --stream checksum differs from the sequential one"
   [ "$(ls "$dir" | grep -c "^$name-s_[0-6]\.vtu$")" = 7 ] || fail "$name: not one piece per partition"
-  ls -a "$dir" | grep -q spool && fail "$name: a spool was left behind"
+  ls -a "$dir" | grep -q 'spool\|\.tmp\.' && fail "$name: a spool or a piece's temporary was left behind"
 
   "$cisamr" mesh "$scene" -o "$dir/$name-m.pvtu" --partitions 7 -q || fail "$name: in memory, 7 partitions"
   same_mesh "$dir/$name-s.pvtu" "$dir/$name-m.pvtu" || fail "$name: streamed and in-memory meshes differ"
