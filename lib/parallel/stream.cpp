@@ -61,17 +61,15 @@ mesh::SimplexMesh<Dim> unspool(const io::AtomicFile& file) {
 }
 
 // Partition k of this rank read back from its spool (deleted then) with its global ids and
-// partition index, after the driver's figures have seen it: what every output writes.
+// partition index: what a one-file output (.msh, .inp) writes.
 template <int Dim>
 mesh::SimplexMesh<Dim> read_back_numbered(std::vector<std::unique_ptr<io::AtomicFile>>& spools,
                                           const std::vector<PartitionFaces<Dim>>& faces,
-                                          const StreamNumbering<Dim>& numbering, std::size_t k,
-                                          const PartitionHook<Dim>& on_partition) {
+                                          const StreamNumbering<Dim>& numbering, std::size_t k) {
   mesh::SimplexMesh<Dim> m = unspool<Dim>(*spools[k]);
   spools[k].reset();  // the temporary is deleted
   m.node_global_id = global_ids_of<Dim>(faces[k], numbering.offset[k], numbering.face_ids[k]);
   m.cell_partition.assign(m.cell_phase.size(), faces[k].partition);
-  if (on_partition) on_partition(m, nullptr);
   return m;
 }
 
@@ -117,7 +115,6 @@ template <int Dim, class WriteChunks, class Join>
 void write_streamed_file(const Comm& comm, const std::string& path, const std::vector<PartitionFaces<Dim>>& faces,
                          const StreamNumbering<Dim>& numbering, std::vector<std::unique_ptr<io::AtomicFile>>& spools,
                          std::vector<io::MshPartSummary>& summaries, int partitions,
-                         const PartitionHook<Dim>& on_partition,
                          WriteChunks&& write_chunks, Join&& join) {
   Packer mine;
   for (std::size_t k = 0; k < faces.size(); ++k) {
@@ -144,7 +141,7 @@ void write_streamed_file(const Comm& comm, const std::string& path, const std::v
   std::vector<PartitionChunks> chunks;
   run_collectively(comm, [&] {
     for (std::size_t k = 0; k < faces.size(); ++k) {
-      const mesh::SimplexMesh<Dim> m = read_back_numbered<Dim>(spools, faces, numbering, k, on_partition);
+      const mesh::SimplexMesh<Dim> m = read_back_numbered<Dim>(spools, faces, numbering, k);
       PartitionChunks c;
       c.partition = faces[k].partition;
       write_chunks(m, k, all, c);
@@ -188,8 +185,7 @@ template <int Dim>
 void write_streamed_msh(const Comm& comm, const std::string& path, const std::vector<PartitionFaces<Dim>>& faces,
                         const StreamNumbering<Dim>& numbering, std::vector<std::unique_ptr<io::AtomicFile>>& spools,
                         std::vector<io::MshPartSummary>& summaries, int partitions,
-                        const std::vector<geometry::Phase>& phases, const io::MeshWriteOptions& write_options,
-                        const PartitionHook<Dim>& on_partition) {
+                        const std::vector<geometry::Phase>& phases, const io::MeshWriteOptions& write_options) {
   constexpr std::size_t kFaces = static_cast<std::size_t>(2 * Dim);
   // Tags: cells by partition, then the facets face by face, partition by partition.
   const auto first_cells = [](const std::vector<io::MshPartSummary>& all) {
@@ -198,7 +194,7 @@ void write_streamed_msh(const Comm& comm, const std::string& path, const std::ve
     return first;
   };
   write_streamed_file<Dim>(
-      comm, path, faces, numbering, spools, summaries, partitions, on_partition,
+      comm, path, faces, numbering, spools, summaries, partitions,
       [&](const mesh::SimplexMesh<Dim>& m, std::size_t k, const std::vector<io::MshPartSummary>& all, PartitionChunks& c) {
         const auto p = static_cast<std::size_t>(c.partition);
         std::array<std::uint64_t, 6> first_facet{};
@@ -232,8 +228,7 @@ template <int Dim>
 void write_streamed_inp(const Comm& comm, const std::string& path, const std::vector<PartitionFaces<Dim>>& faces,
                         const StreamNumbering<Dim>& numbering, std::vector<std::unique_ptr<io::AtomicFile>>& spools,
                         std::vector<io::MshPartSummary>& summaries, int partitions,
-                        const std::vector<geometry::Phase>& phases, const io::MeshWriteOptions& write_options,
-                        const PartitionHook<Dim>& on_partition) {
+                        const std::vector<geometry::Phase>& phases, const io::MeshWriteOptions& write_options) {
   constexpr int kFaces = 2 * Dim, kSides = Dim + 1;
   const auto phase_ids = [](const std::vector<io::MshPartSummary>& all) {
     std::vector<int> ids;
@@ -244,7 +239,7 @@ void write_streamed_inp(const Comm& comm, const std::string& path, const std::ve
     return ids;
   };
   write_streamed_file<Dim>(
-      comm, path, faces, numbering, spools, summaries, partitions, on_partition,
+      comm, path, faces, numbering, spools, summaries, partitions,
       [&](const mesh::SimplexMesh<Dim>& m, std::size_t k, const std::vector<io::MshPartSummary>& all, PartitionChunks& c) {
         std::uint64_t first_cell = 0;
         for (int q = 0; q < c.partition; ++q) first_cell += all[static_cast<std::size_t>(q)].cells;
@@ -340,7 +335,8 @@ DistributedMesh<Dim> mesh_streamed(const Comm& comm, geometry::SceneDesc scene, 
       mesh_partitions<Dim>(comm, std::move(scene), options, [&](PartitionOutput<Dim>& o, const grid::Lattice<Dim>& lattice) {
         mesh::SimplexMesh<Dim>& m = o.result.mesh;
         io::MeshWriteOptions piece_options = write_options;
-        if (!one_file && on_partition) on_partition(m, &piece_options.cell_aspect_ratio);
+        // The driver's figures, outside the write phase's time (a .vtu piece takes their ratios).
+        if (on_partition) on_partition(m, one_file ? nullptr : &piece_options.cell_aspect_ratio);
         ScopedPhase timer(&spooling, "write");
         faces.push_back(partition_faces<Dim>(o, lattice));
         if (one_file) {
@@ -366,10 +362,10 @@ DistributedMesh<Dim> mesh_streamed(const Comm& comm, geometry::SceneDesc scene, 
   if (one_file) {
     if (*one_file == io::MeshFormat::msh)
       write_streamed_msh<Dim>(comm, pvtu_path, faces, numbering, spools, summaries, options.partitions, out.phases,
-                              write_options, on_partition);
+                              write_options);
     else
       write_streamed_inp<Dim>(comm, pvtu_path, faces, numbering, spools, summaries, options.partitions, out.phases,
-                              write_options, on_partition);
+                              write_options);
     return out;
   }
   run_collectively(comm, [&] {

@@ -26,9 +26,8 @@ namespace cisamr::parallel {
 // paired between partitions after meshing) and periodic scenes (masters across the domain).
 void check_streamable(const geometry::SceneDesc& scene, const pipeline::Options& options);
 
-// Sees each streamed partition's mesh just before it is written (the driver's figures):
-// with global ids for one file (.msh, .inp), without them for .vtu pieces, which are written
-// as soon as the partition is meshed, their ids last. Where the output has a per-cell aspect-ratio array (.vtu pieces),
+// Sees each streamed partition's mesh as soon as it is meshed, before it is written or
+// spooled and before its global ids exist (the driver's figures; not timed as "write"). Where the output has a per-cell aspect-ratio array (.vtu pieces),
 // `cell_aspect_ratio` is not null: a hook that computes every cell's ratio anyway may fill
 // it (one per cell, mesh::aspect_ratio's values) and the writer takes it instead of
 // computing them a second time.
