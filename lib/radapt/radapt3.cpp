@@ -598,7 +598,28 @@ class Snapper {
 
   // Would the leaf, with vertex i at entry at[i] of its menu (take_menu), emit only
   // positive tetrahedra within the bound, and could it be split?
-  bool acceptable(const std::array<int, 4>& at) {
+  [[gnu::always_inline]] bool acceptable(const std::array<int, 4>& at) {
+    const auto& e0 = leaf_.entry[0][static_cast<std::size_t>(at[0])];
+    const auto& e1 = leaf_.entry[1][static_cast<std::size_t>(at[1])];
+    const auto& e2 = leaf_.entry[2][static_cast<std::size_t>(at[2])];
+    const auto& e3 = leaf_.entry[3][static_cast<std::size_t>(at[3])];
+    const PhaseMask common = e0.mask & e1.mask & e2.mask & e3.mask;
+    if (common != 0) {  // kept whole (grid::stencil3::outcome): the four positions decide
+      if (single_bit(common) && is_void(std::countr_zero(common))) return true;
+      // Most combinations end here: a table indexed by the positions' `where`s, no hashing.
+      const std::size_t slot = e0.where | e1.where << 3 | e2.where << 6 | e3.where << 9;
+      if (whole_stamp_[slot] != memo_generation_) {
+        whole_stamp_[slot] = memo_generation_;
+        whole_value_[slot] = good(e0.p, e1.p, e2.p, e3.p) ? 1 : 0;
+      }
+      return whole_value_[slot] != 0;
+    }
+    return split_acceptable(at);
+  }
+
+  // acceptable() for a leaf the combination splits (kept out of line, so that the common
+  // case above inlines into the guard's loops).
+  [[gnu::noinline]] bool split_acceptable(const std::array<int, 4>& at) {
     std::array<PhaseMask, 4> mask{};
     std::array<std::uint32_t, 4> where{};  // 0: the lattice position, 1 + j: the node's j-th snap
     for (int i = 0; i < 4; ++i) {
@@ -617,11 +638,6 @@ class Snapper {
       return k;
     };
     const auto& p = leaf_.p;
-    const PhaseMask common = mask[0] & mask[1] & mask[2] & mask[3];
-    if (common != 0) {  // kept whole (grid::stencil3::outcome)
-      if (single_bit(common) && is_void(std::countr_zero(common))) return true;
-      return memo_good(key(0, 1, 2, 3), p[0], p[1], p[2], p[3]);
-    }
     const PhaseMask all = mask[0] | mask[1] | mask[2] | mask[3];
     if (!two_bits(all)) return false;  // three phases: no stencil
     const PhaseMask plus = all & (~all + 1), minus = all & ~plus;
@@ -674,7 +690,11 @@ class Snapper {
   };
   LeafData leaf_;
 
-  // Verdicts of good() within the current leaf (memo_leaf() starts a new leaf).
+  // Verdicts of good() within the current leaf (memo_leaf() starts a new leaf): of the whole
+  // leaf by its vertices' `where`s (3 bits each), of the split's tetrahedra by key.
+  static_assert(kMaxMenu <= 8);
+  std::array<std::uint32_t, 4096> whole_stamp_{};
+  std::array<std::uint8_t, 4096> whole_value_{};
   static constexpr std::size_t kMemoSize = 512;
   std::array<std::uint32_t, kMemoSize> memo_key_{};
   std::array<std::uint32_t, kMemoSize> memo_stamp_{};
