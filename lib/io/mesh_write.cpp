@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <limits>
 #include <numeric>
+#include <span>
 #include <stdexcept>
 #include <string_view>
 
@@ -212,10 +213,14 @@ void write_array_chunked(AtomicFile& file, std::size_t count, Fill fill) {
   }
 }
 template <class T>
-void write_array_raw(AtomicFile& file, const std::vector<T>& values) {
+void write_array_raw(AtomicFile& file, std::span<const T> values) {
   const std::uint64_t bytes = values.size() * sizeof(T);
   file.write(&bytes, sizeof bytes);
   file.write(values.data(), bytes);
+}
+template <class T>
+void write_array_raw(AtomicFile& file, const std::vector<T>& values) {
+  write_array_raw(file, std::span<const T>(values));
 }
 
 // The VTK ASCII encoding of a string array: each string's bytes as decimal integers, then 0.
@@ -407,9 +412,7 @@ constexpr std::string_view kVtuEnd = "\n  </AppendedData>\n</VTKFile>\n";
 
 // The global_id block (the last one, see above) and the closing tags.
 void write_vtu_ids(AtomicFile& file, std::span<const GlobalId> ids) {
-  const std::uint64_t bytes = ids.size() * sizeof(GlobalId);
-  file.write(&bytes, sizeof bytes);
-  file.write(ids.data(), bytes);
+  write_array_raw(file, ids);
   file.write(kVtuEnd);
 }
 
