@@ -1,6 +1,7 @@
 // cisamr mesh: parses the options, meshes through driver::mesh_scene (sequential, or the
 // parallel mesher with --partitions N or under mpiexec), writes, prints (mesh_summary.cpp).
 // Every rank runs all of this; only rank 0 prints and writes the report.
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -212,7 +213,19 @@ void add_mesh_command(CLI::App& app, GlobalFlags& flags, int& exit_code) {
   cmd->add_option("--ghost-cubes", ghost.margin3_cubes,
                   "Comparison (3D): a ghost of this many coarse cubes instead of the one derived from the "
                   "kernel's reach (lib/parallel/README.md); too few break partition invariance")
-      ->check(number_in(0, 1e6))
+      ->check(named("--ghost-cubes", number_in(0, 1e6)))
+      ->group("");
+  cmd->add_option("--ghost-windows", ghost.radapt_window_cells3,
+                  "Comparison (3D): r-adaptivity's window around a partition box, in cells of the deciding level "
+                  "(face swapping's: 4 fewer, at least half a cell), instead of the derived ones (8 and 4); -1: both on the "
+                  "whole ghost, as before the windows (lib/parallel/README.md); too small ones break partition "
+                  "invariance")
+      ->check(named("--ghost-windows", number_in(-1, 1e6)))
+      ->each([&ghost](const std::string& value) {  // (runs before the option's value is stored)
+        const double cells = std::stod(value);
+        ghost.swap_window_cells3 =
+            cells < 0 ? -1.0 : std::max(0.5, cells - (parallel::kRadaptWindow3 - parallel::kSwapWindow3));
+      })
       ->group("");
   cmd->callback([args, &flags, &exit_code] { run_mesh(*args, flags, exit_code); });
 }

@@ -34,10 +34,16 @@ nlohmann::json algorithm(const MeshRun<Dim>& run) {
 }
 
 std::string ghost_rule(int dim, const parallel::GhostRule& rule) {
-  if (dim == 3)
-    return rule.margin3_cubes > 0
-               ? "forced-" + std::to_string(static_cast<int>(std::ceil(rule.margin3_cubes))) + "-cubes"
-               : "reach-3d";
+  if (dim == 3) {
+    std::string name = rule.margin3_cubes > 0
+                           ? "forced-" + std::to_string(static_cast<int>(std::ceil(rule.margin3_cubes))) + "-cubes"
+                           : "reach-3d";
+    // The windows of r-adaptivity and face swapping (pipeline::Ghost), when not derived.
+    if (rule.radapt_window_cells3 < 0 || rule.swap_window_cells3 < 0) name += "-whole-ghost";
+    else if (rule.radapt_window_cells3 > 0 || rule.swap_window_cells3 > 0)
+      name += "-windows-" + std::to_string(rule.radapt_window_cells3) + "-" + std::to_string(rule.swap_window_cells3);
+    return name;
+  }
   return rule.level_aware ? "level-aware" : "fixed-" + std::to_string(static_cast<int>(rule.fixed_cells)) + "-cells";
 }
 

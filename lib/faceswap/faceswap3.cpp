@@ -210,7 +210,7 @@ class Swapper {
     for (int i = 0; i < 3; ++i) {
       const std::int32_t t =
           leaf_at(level, grid::TetCode{cube, static_cast<std::uint8_t>(locals[static_cast<std::size_t>(i)])});
-      if (t < 0 || has_hanging_midpoint(t)) return false;
+      if (t < 0 || !nodes_.registered(t) || has_hanging_midpoint(t)) return false;
       h.leaves[static_cast<std::size_t>(i)] = t;
       h.before = std::max(h.before, leaf_worst(t));
     }
@@ -255,7 +255,9 @@ class Swapper {
     std::unordered_map<LatticeKey3, std::uint64_t> seen;  // lower cube's min corner → bit 3·level + axis
     for (std::int32_t t = 0; t < static_cast<std::int32_t>(forest_.size()); ++t) {
       advance_sometimes(options_.progress, t, static_cast<std::int64_t>(forest_.size()));
-      if (!forest_.is_leaf(t) || forest_.kind(t) != tet::Kind::corner) continue;
+      if (!forest_.is_leaf(t) || forest_.kind(t) != tet::Kind::corner || !options_.window.holds(forest_, t) ||
+          !nodes_.registered(t))
+        continue;
       // A leaf with every vertex unmoved and no phase change keeps its honeycomb shape.
       const auto& ids = nodes_.tet_nodes[static_cast<std::size_t>(t)];
       bool touched = nodes_.edges_of(t) != nullptr;

@@ -37,6 +37,9 @@ inline constexpr int kReachCells3 = kCompetitorCells3 + radapt::kReachCells3;
 
 struct Options3 {
   double trigger = 3.0;  // corner tets above this aspect ratio look for a swap (0: no swapping)
+  // The corner tets that look for a swap (a partition's: those within reach of its box);
+  // a candidate whose cubes r-adaptivity did not register (outside its window) is dropped.
+  grid::LeafWindow window{};
   Progress* progress = nullptr;  // advanced over the forest's tets (may be null)
 };
 

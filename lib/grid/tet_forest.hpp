@@ -110,4 +110,31 @@ class TetForest {
   void leaves_with_vertex(std::int32_t t, const LatticePoint3& p, std::vector<std::int32_t>& out) const;
 };
 
+// The leaves a kernel stage works on in a partition (lib/parallel/README.md, "Ghost region
+// (3D)"): those whose cube comes within `reach` fine lattice units of the box on every axis,
+// or every leaf (reach < 0). The ghost's outer part is there for SAMR's sake; r-adaptivity
+// and face swapping need only the leaves their decisions in the box can read.
+struct LeafWindow {
+  LatticePoint3 lo{}, hi{};  // the box, fine lattice units
+  std::int64_t reach = -1;
+
+  static LeafWindow around(const Lattice3& lattice, const CellRange<3>& box, std::int64_t reach) {
+    LeafWindow w;
+    for (int d = 0; d < 3; ++d) w.lo[d] = box.lo[d] * lattice.units(0), w.hi[d] = box.hi[d] * lattice.units(0);
+    w.reach = reach;
+    return w;
+  }
+  bool all() const { return reach < 0; }
+  bool holds(const TetForest& forest, std::int32_t t) const {
+    if (reach < 0) return true;
+    const TetForest::Tet& x = forest.tet(t);
+    const std::int64_t side = forest.lattice().units(x.level);
+    for (int d = 0; d < 3; ++d) {
+      const std::int64_t a = static_cast<std::int64_t>(x.cube[static_cast<std::size_t>(d)]) * side;
+      if (lo[d] - (a + side) > reach || a - hi[d] > reach) return false;
+    }
+    return true;
+  }
+};
+
 }  // namespace cisamr::grid

@@ -377,7 +377,7 @@ DistributedMesh<Dim> mesh_partitions(const Comm& comm, geometry::SceneDesc scene
       std::vector<int> region_levels;
       for (std::int32_t k : region.inclusions) region_levels.push_back(levels[static_cast<std::size_t>(k)]);
       PartitionOutput<Dim> o{
-          p, region.box, pipeline::run(*oracle, lattice, region.box, region.ghost, kernel_options, p, region_levels)};
+          p, region.box, pipeline::run(*oracle, lattice, region.box, kernel_ghost(region), kernel_options, p, region_levels)};
       std::int64_t box_cells = 1;
       for (int d = 0; d < Dim; ++d) box_cells *= region.box.count(d);
       PartitionSummary s;

@@ -206,20 +206,30 @@ GhostRegion<Dim> ghost_region(const InclusionIndex<Dim>& index, const grid::Latt
 
 GhostRegion3 ghost_region3(const InclusionIndex3& index, const grid::Lattice<3>& lattice, const grid::CellRange<3>& box,
                            const GhostRule& rule, std::span<const int> levels) {
-  int margin = static_cast<int>(std::ceil(rule.margin3_cubes));
-  if (margin <= 0) {
-    // The coarsest effective level among the inclusions that could matter at all (the
-    // widest margin); the margin of that level.
-    const GhostRegion3 widest = grow<3>(index, lattice, box, ghost_margin3(0), 0, false);
-    int coarsest = -1;
-    for (std::int32_t k : widest.inclusions) {
-      const int l = levels[static_cast<std::size_t>(k)];
-      coarsest = coarsest < 0 ? l : std::min(coarsest, l);
-    }
-    margin = coarsest < 0 ? 1 : ghost_margin3(coarsest);
+  // The coarsest effective level among the inclusions that could matter at all (the widest
+  // margin): the margin of that level, and the windows in cells of that level.
+  const GhostRegion3 widest = grow<3>(index, lattice, box, ghost_margin3(0), 0, false);
+  int coarsest = -1;
+  for (std::int32_t k : widest.inclusions) {
+    const int l = levels[static_cast<std::size_t>(k)];
+    coarsest = coarsest < 0 ? l : std::min(coarsest, l);
   }
+  int margin = static_cast<int>(std::ceil(rule.margin3_cubes));
+  if (margin <= 0) margin = coarsest < 0 ? 1 : ghost_margin3(coarsest);
   GhostRegion3 region = grow<3>(index, lattice, box, margin, rule.max_closure_rounds, rule.max_closure_rounds != 0);
   region.margin = margin;
+  region.level = coarsest;
+  // Without inclusions nearby nothing snaps or swaps: the windows stay whole. Closure
+  // rounds (a comparison of the old rule) keep them whole too.
+  if (coarsest >= 0 && rule.max_closure_rounds == 0) {
+    const auto reach = [&](double forced, int derived) -> std::int64_t {
+      if (forced < 0) return -1;
+      const double cells = forced > 0 ? forced : derived;
+      return static_cast<std::int64_t>(std::ceil(cells * static_cast<double>(lattice.units(std::min(coarsest, lattice.max_level)))));
+    };
+    region.radapt_reach = reach(rule.radapt_window_cells3, kRadaptWindow3);
+    region.swap_reach = reach(rule.swap_window_cells3, kSwapWindow3);
+  }
   return region;
 }
 

@@ -46,6 +46,15 @@ inline constexpr double kKernelReach3 =                          // cells of the
     std::max({radapt::kReachCells3, faceswap::kReachCells3, subdivide::kReachCells3});
 inline constexpr int kGhostSafety3 = 1;  // coarse cubes on top of the bound
 
+// 3D windows of the later stages inside that ghost, in cells of the deciding level (README.md,
+// "Ghost region (3D)"): the forest is needed on the whole ghost for SAMR's sake, but a
+// decision in the box reads face-swap candidates of corner tets at most kCompetitorCells3
+// cells out (window: that + kWindowSafety3), which read the cubes one cell beyond them, whose
+// final node positions read leaves radapt::kReachCells3 further (r-adaptivity's window).
+inline constexpr int kWindowSafety3 = 2;
+inline constexpr int kSwapWindow3 = faceswap::kCompetitorCells3 + kWindowSafety3;
+inline constexpr int kRadaptWindow3 = kSwapWindow3 + 1 + radapt::kReachCells3;
+
 // Coarse cubes of ghost a 3D box needs when the coarsest effective level among the
 // inclusions near it is `level`: ⌈kSamrReach3 + kKernelReach3 / 2^level⌉ + kGhostSafety3
 // (8 at level 0, 6 at level 1, 5 at level 2, 4 from level 3 on).
@@ -66,6 +75,11 @@ struct GhostRule {
   // and the tests that show a too small ghost breaks invariance). In 3D inclusion boxes
   // are not inflated (level_aware and fixed_cells are 2D rules): the margin covers that.
   double margin3_cubes = 0;
+  // 3D: the windows of r-adaptivity and face swapping, in cells of the deciding level
+  // (pipeline::Ghost). 0 (default): kRadaptWindow3 and kSwapWindow3; > 0: that many
+  // (comparisons, and the tests that show a too small window breaks invariance); < 0: every
+  // leaf of the ghost (as before the windows).
+  double radapt_window_cells3 = 0, swap_window_cells3 = 0;
   // Rounds of the closure "add every inclusion whose inflated box meets an added one's".
   // 0 (default): none. pipeline::effective_levels2/3 settle every level that rule R4 could
   // carry from one inclusion to another before meshing, so what decides a cell lies within
@@ -120,8 +134,15 @@ struct GhostRegion {
   grid::CellRange<Dim> range;  // coarse cells whose state decides the box (clipped to the domain)
   int ghost = 0;               // uniform width that covers `range` (what pipeline::run2/run3 take)
   int margin = 0;              // 3D: the margin it was chosen with (coarse cubes)
+  int level = -1;              // 3D: the coarsest effective level near the box (-1: no inclusion)
+  // 3D: r-adaptivity's and face swapping's windows, fine lattice units (-1: every leaf).
+  std::int64_t radapt_reach = -1, swap_reach = -1;
   std::vector<std::int32_t> inclusions;  // scene indices, ascending
 };
+template <int Dim>
+pipeline::Ghost kernel_ghost(const GhostRegion<Dim>& region) {
+  return {region.ghost, region.radapt_reach, region.swap_reach};
+}
 using GhostRegion2 = GhostRegion<2>;
 using GhostRegion3 = GhostRegion<3>;
 

@@ -35,8 +35,8 @@ void assemble(const geometry::SceneDesc& scene, MeshParts<Dim>&& parts, int part
 // `box` grown by `ghost`, fills the counters and stage times of `result`, and returns what
 // the mesh is made of; the stages' working state is released on return, before assembly.
 MeshParts<2> run_stages(const geometry::Oracle2& oracle, const grid::Lattice<2>& lattice, const grid::CellRange<2>& box,
-                        int ghost, const Options& options, std::span<const int> levels, Result<2>& result);
+                        const Ghost& ghost, const Options& options, std::span<const int> levels, Result<2>& result);
 MeshParts<3> run_stages(const geometry::Oracle3& oracle, const grid::Lattice<3>& lattice, const grid::CellRange<3>& box,
-                        int ghost, const Options& options, std::span<const int> levels, Result<3>& result);
+                        const Ghost& ghost, const Options& options, std::span<const int> levels, Result<3>& result);
 
 }  // namespace cisamr::pipeline

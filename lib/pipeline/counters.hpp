@@ -67,6 +67,9 @@ struct DimensionCounters<3> {
   // thinner than their edge; leaves and option combinations checked.
   std::int64_t refused_nodes = 0, collapsed_nodes = 0, collapsed_cut_points = 0;
   std::int64_t guarded_leaves = 0, guard_combinations = 0;
+  // Leaves r-adaptivity worked on: all of them in one box, a partition's within reach of its
+  // box (pipeline::Ghost), fewer than `leaves`, which counts the whole ghost's forest.
+  std::int64_t snapping_leaves = 0;
 
   template <class Visit>
   static void for_each(Visit&& visit) {
@@ -90,6 +93,7 @@ struct DimensionCounters<3> {
     visit("collapsed_cut_points", &C::collapsed_cut_points, Reduction::sum);
     visit("guarded_leaves", &C::guarded_leaves, Reduction::sum);
     visit("guard_combinations", &C::guard_combinations, Reduction::sum);
+    visit("snapping_leaves", &C::snapping_leaves, Reduction::sum);
   }
 };
 

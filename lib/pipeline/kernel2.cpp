@@ -10,11 +10,11 @@ namespace cisamr::pipeline {
 // Runs the stages and returns what the mesh is made of; their working state (the forest,
 // the node table's masks and registry) is released on return, before assembly.
 MeshParts<2> run_stages(const geometry::Oracle2& oracle, const grid::Lattice2& lattice, const grid::CellRange<2>& box,
-                        int ghost, const Options& options, std::span<const int> levels, Result<2>& result) {
+                        const Ghost& ghost, const Options& options, std::span<const int> levels, Result<2>& result) {
   Counters<2>& counters = result.counters;
   samr::RefinedGrid2 grid = [&] {
     ScopedPhase timer(&result.times, "samr");
-    return samr::refine2(oracle, lattice, ghosted_range(lattice, box, ghost), levels, options.progress);
+    return samr::refine2(oracle, lattice, ghosted_range(lattice, box, ghost.cubes), levels, options.progress);
   }();
   // As in 3D (kernel3.cpp): freed working state back to the system after each stage.
   grid.release_lists();

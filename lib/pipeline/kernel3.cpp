@@ -13,9 +13,14 @@ namespace cisamr::pipeline {
 // the snapping state, the swaps) is released on return, before the mesh is built, so that
 // it does not add to the peak (validation/paper3/README.md, memory).
 MeshParts<3> run_stages(const geometry::Oracle3& oracle, const grid::Lattice3& lattice, const grid::CellRange<3>& box,
-                        int ghost, const Options& options, std::span<const int> levels, Result<3>& result) {
+                        const Ghost& ghost, const Options& options, std::span<const int> levels, Result<3>& result) {
   Counters<3>& counters = result.counters;
-  const grid::CellRange<3> range = ghosted_range(lattice, box, ghost);
+  const grid::CellRange<3> range = ghosted_range(lattice, box, ghost.cubes);
+  // On a periodic lattice the ghost wraps around the period (frame coordinates): every leaf.
+  const auto window = [&](std::int64_t reach) {
+    return grid::LeafWindow::around(lattice, box, lattice.any_periodic() ? -1 : reach);
+  };
+  const grid::LeafWindow radapt_window = window(ghost.radapt_reach);
   samr::RefinedGrid3 grid = [&] {
     ScopedPhase timer(&result.times, "samr");
     return samr::refine3(oracle, lattice, range, levels, options.progress);
@@ -29,7 +34,10 @@ MeshParts<3> run_stages(const geometry::Oracle3& oracle, const grid::Lattice3& l
   counters.refinements = grid.refinements;
   counters.samr_sweeps = grid.sweeps;
   for (std::int32_t t = 0; t < static_cast<std::int32_t>(grid.forest.size()); ++t)
-    counters.leaves += grid.forest.is_leaf(t) ? 1 : 0;
+    if (grid.forest.is_leaf(t)) {
+      ++counters.leaves;
+      counters.snapping_leaves += radapt_window.holds(grid.forest, t) ? 1 : 0;
+    }
 
   radapt::Nodes3 nodes = [&] {
     ScopedPhase timer(&result.times, "radapt");
@@ -37,6 +45,7 @@ MeshParts<3> run_stages(const geometry::Oracle3& oracle, const grid::Lattice3& l
                          radapt::Options3{.alpha = options.alpha, .alpha_diagonal = options.alpha_diagonal3,
                                           .max_candidates = options.max_candidates3,
                                           .bound = options.bound3,
+                                          .window = radapt_window,
                                           .progress = options.progress});
   }();
   release_free_memory();
@@ -52,7 +61,9 @@ MeshParts<3> run_stages(const geometry::Oracle3& oracle, const grid::Lattice3& l
 
   const faceswap::Swaps3 swaps = [&] {
     ScopedPhase timer(&result.times, "faceswap");
-    return faceswap::swap3(oracle, grid, nodes, faceswap::Options3{.trigger = options.swap_trigger3, .progress = options.progress});
+    return faceswap::swap3(oracle, grid, nodes, faceswap::Options3{.trigger = options.swap_trigger3,
+                                                                      .window = window(ghost.swap_reach),
+                                                                      .progress = options.progress});
   }();
   release_free_memory();
   counters.face_swaps = swaps.swaps;

@@ -147,7 +147,7 @@ void assemble(const geometry::SceneDesc& scene, MeshParts<Dim>&& parts, int part
 
 template <int Dim>
 Result<Dim> run(const geometry::Oracle<Dim>& oracle, const grid::Lattice<Dim>& lattice, const grid::CellRange<Dim>& box,
-                int ghost, const Options& options, int partition_id, std::span<const int> levels) {
+                const Ghost& ghost, const Options& options, int partition_id, std::span<const int> levels) {
   Result<Dim> result;
   result.times.progress = options.progress;
   MeshParts<Dim> parts = run_stages(oracle, lattice, box, ghost, options, levels, result);
@@ -177,7 +177,7 @@ Result<2> mesh(const geometry::Oracle2& oracle, const Options& options) {
   const grid::Lattice2 lattice = make_lattice<2>(oracle.scene(), options);
   begin_phase(options.progress, "levels");
   const std::vector<int> levels = effective_levels2(oracle.scene(), lattice);
-  return with_cohesive(run(oracle, lattice, lattice.whole_domain(), 0, options, 0, levels), lattice, options);
+  return with_cohesive(run(oracle, lattice, lattice.whole_domain(), Ghost{}, options, 0, levels), lattice, options);
 }
 
 Result<3> mesh(const geometry::Oracle3& oracle, const Options& options) {
@@ -185,7 +185,7 @@ Result<3> mesh(const geometry::Oracle3& oracle, const Options& options) {
   begin_phase(options.progress, "levels");
   const std::vector<int> levels =
       effective_levels3(oracle.scene(), lattice, {}, surface_unions(oracle.scene()));
-  return with_cohesive(run(oracle, lattice, lattice.whole_domain(), 0, options, 0, levels), lattice, options);
+  return with_cohesive(run(oracle, lattice, lattice.whole_domain(), Ghost{}, options, 0, levels), lattice, options);
 }
 
 template grid::Lattice<2> make_lattice<2>(const geometry::SceneDesc&, const Options&);
@@ -196,9 +196,9 @@ template grid::CellRange<2> ghosted_range<2>(const grid::Lattice<2>&, const grid
 template grid::CellRange<3> ghosted_range<3>(const grid::Lattice<3>&, const grid::CellRange<3>&, int);
 template void assemble<2>(const geometry::SceneDesc&, MeshParts<2>&&, int, Result<2>&);
 template void assemble<3>(const geometry::SceneDesc&, MeshParts<3>&&, int, Result<3>&);
-template Result<2> run<2>(const geometry::Oracle2&, const grid::Lattice<2>&, const grid::CellRange<2>&, int,
+template Result<2> run<2>(const geometry::Oracle2&, const grid::Lattice<2>&, const grid::CellRange<2>&, const Ghost&,
                           const Options&, int, std::span<const int>);
-template Result<3> run<3>(const geometry::Oracle3&, const grid::Lattice<3>&, const grid::CellRange<3>&, int,
+template Result<3> run<3>(const geometry::Oracle3&, const grid::Lattice<3>&, const grid::CellRange<3>&, const Ghost&,
                           const Options&, int, std::span<const int>);
 
 }  // namespace cisamr::pipeline

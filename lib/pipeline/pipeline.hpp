@@ -95,14 +95,24 @@ struct MeshEstimate {
 template <int Dim>
 MeshEstimate estimate_mesh(const geometry::SceneDesc& scene);
 
-// Meshes the coarse cells of `box` (global coarse indices), using `ghost` extra coarse
-// cells on each side (clipped to the domain) so that decisions inside the box are those
-// of the whole-domain run. Cells of void phases are dropped; unused nodes removed.
+// What a partition's kernel takes around its box (lib/parallel/README.md, "Ghost region").
+// SAMR builds its forest on `cubes` coarse cells on each side; in 3D r-adaptivity and face
+// swapping then work only on the leaves within their reach of the box (fine lattice units,
+// grid::LeafWindow; -1: every leaf), which is all their decisions in the box read.
+struct Ghost {
+  int cubes = 0;
+  std::int64_t radapt_reach = -1;
+  std::int64_t swap_reach = -1;
+};
+
+// Meshes the coarse cells of `box` (global coarse indices), using the `ghost` around it
+// (clipped to the domain) so that decisions inside the box are those of the whole-domain
+// run. Cells of void phases are dropped; unused nodes removed.
 // `levels`: the level rule R1 asks of each of the oracle's inclusions, from
 // effective_levels2/3 over the whole scene (a partition's oracle holds a subset of it).
 template <int Dim>
 Result<Dim> run(const geometry::Oracle<Dim>& oracle, const grid::Lattice<Dim>& lattice, const grid::CellRange<Dim>& box,
-                int ghost, const Options& options, int partition_id, std::span<const int> levels);
+                const Ghost& ghost, const Options& options, int partition_id, std::span<const int> levels);
 
 // The whole domain in one box, with the levels effective_levels2/3 settle over the whole
 // scene (as every partition of the parallel mesher uses, so that one process and any

@@ -135,8 +135,12 @@ class Snapper {
     for (std::int32_t t = 0; t < static_cast<std::int32_t>(forest_.size()); ++t) {
       tet_done(0, t);
       if (!forest_.is_leaf(t)) continue;
-      const auto v = forest_.fine_vertices(t);
       auto& ids = nodes_.tet_nodes[static_cast<std::size_t>(t)];
+      if (!options_.window.holds(forest_, t)) {
+        ids = {-1, -1, -1, -1};
+        continue;
+      }
+      const auto v = forest_.fine_vertices(t);
       const std::uint8_t level = forest_.tet(t).level;
       for (int i = 0; i < 4; ++i) {
         ids[static_cast<std::size_t>(i)] = add_node(v[i]);
@@ -216,7 +220,7 @@ class Snapper {
     grid::OpenKeyMap<std::pair<LatticeKey3, LatticeKey3>, EdgeKeyHash> index(forest_.size() / 32 + 16);
     for (std::int32_t t = 0; t < static_cast<std::int32_t>(forest_.size()); ++t) {
       tet_done(1, t);
-      if (!forest_.is_leaf(t) || !g_.is_cut(t)) continue;
+      if (!forest_.is_leaf(t) || !g_.is_cut(t) || !nodes_.registered(t)) continue;
       const auto& ids = nodes_.tet_nodes[static_cast<std::size_t>(t)];
       const auto v = forest_.fine_vertices(t);
       std::array<std::int32_t, 6> slots{-1, -1, -1, -1, -1, -1};
@@ -503,7 +507,7 @@ class Snapper {
     std::vector<std::uint8_t> likely(option_.size(), 0);  // pass 1's refusals
     for (std::int32_t t = 0; t < static_cast<std::int32_t>(forest_.size()); ++t) {
       tet_done(2, t);
-      if (!forest_.is_leaf(t) || !build_menu(t, menu, count)) continue;
+      if (!forest_.is_leaf(t) || !nodes_.registered(t) || !build_menu(t, menu, count)) continue;
       memo_leaf(t);
       for (int i = 0; i < 4; ++i) chosen[static_cast<std::size_t>(i)] = menu[static_cast<std::size_t>(i)][0];
       take_menu(t, menu, {1, 1, 1, 1});
@@ -516,7 +520,7 @@ class Snapper {
 
     for (std::int32_t t = 0; t < static_cast<std::int32_t>(forest_.size()); ++t) {
       tet_done(3, t);
-      if (!forest_.is_leaf(t) || !build_menu(t, menu, count)) continue;
+      if (!forest_.is_leaf(t) || !nodes_.registered(t) || !build_menu(t, menu, count)) continue;
       ++nodes_.guarded_leaves;
       memo_leaf(t);
       // Pass 1's refusals leave the menus (their combinations cannot happen).

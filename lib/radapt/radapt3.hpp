@@ -42,6 +42,9 @@ struct Options3 {
   double alpha_diagonal = 0.2;  // along face diagonals (0: axis edges only, as in the paper)
   int max_candidates = 2;       // snap candidates kept per node (nearest first), at most 6
   double bound = 5.0;           // the guard's aspect-ratio bound; 0 disables the guard
+  // The leaves worked on (a partition's: those within reach of its box); the others get no
+  // nodes (Nodes3::registered is false) and refuse nothing. Default: every leaf.
+  grid::LeafWindow window{};
   Progress* progress = nullptr;  // advanced over the forest's tets, once per pass (may be null)
 };
 
@@ -125,7 +128,7 @@ struct Nodes3 {
   // an edge's midpoint only if a finer leaf touches one of the edge's ends.
   std::vector<std::uint8_t> finest_level;
   // Node ids of each leaf's vertices (fine_vertices order), indexed by forest tet;
-  // unspecified for non-leaves.
+  // unspecified for non-leaves, -1 for leaves outside Options3::window.
   std::vector<std::array<std::int32_t, 4>> tet_nodes;
   grid::LatticeKeyIndex registry{1024};  // lattice key → node id, over `key`
 
@@ -161,6 +164,8 @@ struct Nodes3 {
                                      [&](std::int32_t e, const auto& key) { return ends(e) < key; });
     return it != edge_order.end() && ends(*it) == k ? *it : -1;
   }
+  // Was leaf t inside the window (its vertices have nodes)?
+  bool registered(std::int32_t t) const { return tet_nodes[static_cast<std::size_t>(t)][0] >= 0; }
   bool moved(std::int32_t n) const { return state[static_cast<std::size_t>(n)] == NodeState::snapped; }
   // Could leaf `t` (level `level`, vertices `ids`) carry a node at one of its edge midpoints?
   bool may_hang(const std::array<std::int32_t, 4>& ids, int level) const {
