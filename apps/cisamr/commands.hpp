@@ -29,6 +29,9 @@ bool show_progress(const GlobalFlags& flags);
 // be a number in [1, 1e+06] (got nan)". `number_in`: a finite number in [lo, hi], a whole
 // one where `whole`; `output_path`: not empty ("--output: an empty path: ...").
 CLI::Validator number_in(double lo, double hi, bool whole = false);
+// A hidden option (group "") has no name in CLI11's messages (": must be ..."): `named`
+// puts it back ("--ghost-cubes: must be ..."; main drops the empty prefix).
+CLI::Validator named(const std::string& option, CLI::Validator check);
 CLI::Validator output_path();
 
 // Writes a report file whole (io::AtomicFile: it appears complete or not at all).

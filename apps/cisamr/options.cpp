@@ -40,6 +40,15 @@ CLI::Validator number_in(double lo, double hi, bool whole) {
       range);
 }
 
+CLI::Validator named(const std::string& option, CLI::Validator check) {
+  return CLI::Validator(
+      [option, check](std::string& text) {
+        const std::string message = check(text);
+        return message.empty() ? message : option + ": " + message;
+      },
+      check.get_description());
+}
+
 CLI::Validator output_path() {
   return CLI::Validator([](std::string& text) { return text.empty() ? std::string("an empty path: name a file (or - for standard output)") : std::string(); },
                         "");

@@ -104,6 +104,8 @@ TEST_F(CliOptions, NumericOptionsAreRangeCheckedNamingTheOption) {
       {"mesh " + s + " -o " + out() + " --partitions 100000", "--partitions"},
       {"mesh " + s + " -o " + out() + " --max-elements -1", "--max-elements"},
       {"mesh " + s + " -o ''", "--output"},
+      {"mesh " + s + " -o " + out() + " --ghost-cubes -5", "--ghost-cubes"},  // hidden options too
+      {"mesh " + s + " -o " + out() + " --ghost-windows -2", "--ghost-windows"},
       {"certify " + s + " --fidelity-tolerance nan", "--fidelity-tolerance"},
       {"certify " + s + " --bound 0.5", "--bound"},
       {"pack " + s + " -o x.json --seed abc", "--seed"},
@@ -118,6 +120,7 @@ TEST_F(CliOptions, NumericOptionsAreRangeCheckedNamingTheOption) {
     EXPECT_NE(r.output.find(c.option), std::string::npos) << r.output;
     EXPECT_EQ(r.output.find("<input>"), std::string::npos) << r.output;
     EXPECT_EQ(r.output.find(": n:"), std::string::npos) << r.output;
+    EXPECT_EQ(r.output.find("error: :"), std::string::npos) << r.output;
     EXPECT_FALSE(out_exists());
   }
 }
