@@ -70,6 +70,13 @@ void run_mesh(MeshArgs& args, const GlobalFlags& flags, int& exit_code) {
   const Comm& comm = parallel::world();
   driver::Options& options = args.options;
   options.ghost.level_aware = !args.fixed_ghost;
+  // --ghost-windows C (3D comparisons): face swapping's window follows r-adaptivity's.
+  parallel::GhostRule& ghost = options.ghost;
+  if (ghost.radapt_window_cells3 != 0)
+    ghost.swap_window_cells3 = ghost.radapt_window_cells3 < 0
+                                   ? -1.0
+                                   : std::max(0.5, ghost.radapt_window_cells3 -
+                                                       (parallel::kRadaptWindow3 - parallel::kSwapWindow3));
   options.figures = !args.report.empty();
   options.svg_slice = {.axis = args.svg_axis[0] - 'x', .at = args.svg_at};
   // Progress: drawn on rank 0, for the slowest rank (flags are alike on every rank, so every
@@ -209,6 +216,7 @@ void add_mesh_command(CLI::App& app, GlobalFlags& flags, int& exit_code) {
   cmd->add_option("--ghost-closure-rounds", ghost.max_closure_rounds,
                   "Comparison: chain the ghost region through R rounds of nearby inclusions (0, the default, "
                   "is exact because inclusion levels are settled beforehand; -1: the full closure)")
+      ->check(named("--ghost-closure-rounds", number_in(-1, 1e6, true)))
       ->group("");
   cmd->add_option("--ghost-cubes", ghost.margin3_cubes,
                   "Comparison (3D): a ghost of this many coarse cubes instead of the one derived from the "
@@ -217,15 +225,10 @@ void add_mesh_command(CLI::App& app, GlobalFlags& flags, int& exit_code) {
       ->group("");
   cmd->add_option("--ghost-windows", ghost.radapt_window_cells3,
                   "Comparison (3D): r-adaptivity's window around a partition box, in cells of the deciding level "
-                  "(face swapping's: 4 fewer, at least half a cell), instead of the derived ones (8 and 4); -1: both on the "
-                  "whole ghost, as before the windows (lib/parallel/README.md); too small ones break partition "
+                  "(face swapping's: 4 fewer, at least half a cell), instead of the derived ones (8 and 4; 0: those); "
+                  "-1: both on the whole ghost, as before the windows (lib/parallel/README.md); too small ones break partition "
                   "invariance")
       ->check(named("--ghost-windows", number_in(-1, 1e6)))
-      ->each([&ghost](const std::string& value) {  // (runs before the option's value is stored)
-        const double cells = std::stod(value);
-        ghost.swap_window_cells3 =
-            cells < 0 ? -1.0 : std::max(0.5, cells - (parallel::kRadaptWindow3 - parallel::kSwapWindow3));
-      })
       ->group("");
   cmd->callback([args, &flags, &exit_code] { run_mesh(*args, flags, exit_code); });
 }

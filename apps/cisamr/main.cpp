@@ -114,7 +114,7 @@ int main(int argc, char** argv) {
     return root ? app.exit(e) : app.exit(e, null_stream, null_stream);
   } catch (const CLI::ParseError& e) {
     std::string what = e.what();
-    if (what.rfind(": ", 0) == 0) what.erase(0, 2);  // a hidden option's empty name (commands.hpp, named)
+    if (what.starts_with(": ")) what.erase(0, 2);  // a hidden option's empty name (commands.hpp, named)
     return fail(2, "cisamr: error: " + what, true);
   } catch (const InputError& e) {
     return fail(2, std::string("cisamr: error: ") + e.what(), parallel::is_collective(e));

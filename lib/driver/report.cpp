@@ -2,6 +2,8 @@
 #include <cinttypes>
 #include <cmath>
 #include <cstdio>
+#include <sstream>
+#include <string>
 #include <nlohmann/json.hpp>
 
 #include "driver/driver.hpp"
@@ -39,9 +41,15 @@ std::string ghost_rule(int dim, const parallel::GhostRule& rule) {
                            ? "forced-" + std::to_string(static_cast<int>(std::ceil(rule.margin3_cubes))) + "-cubes"
                            : "reach-3d";
     // The windows of r-adaptivity and face swapping (pipeline::Ghost), when not derived.
-    if (rule.radapt_window_cells3 < 0 || rule.swap_window_cells3 < 0) name += "-whole-ghost";
-    else if (rule.radapt_window_cells3 > 0 || rule.swap_window_cells3 > 0)
-      name += "-windows-" + std::to_string(rule.radapt_window_cells3) + "-" + std::to_string(rule.swap_window_cells3);
+    const auto text = [](double cells) {
+      std::ostringstream s;
+      s << cells;
+      return s.str();
+    };
+    if (rule.radapt_window_cells3 < 0 && rule.swap_window_cells3 < 0)
+      name += "-whole-ghost";
+    else if (rule.radapt_window_cells3 != 0 || rule.swap_window_cells3 != 0)
+      name += "-windows-" + text(rule.radapt_window_cells3) + "-" + text(rule.swap_window_cells3);
     return name;
   }
   return rule.level_aware ? "level-aware" : "fixed-" + std::to_string(static_cast<int>(rule.fixed_cells)) + "-cells";

@@ -16,13 +16,15 @@
 // certified. A cube takes part in at most one swap; competing swaps are settled by a fixed
 // priority (worst tets first, then the better result, then the apex key and axis), each
 // swap applied iff it beats every swap it competes with, so the outcome is order-free and
-// the same on every partition whose ghost holds the two cubes and their neighbours.
+// the same on every partition whose windows (Options3::window, and r-adaptivity's) hold the two
+// cubes and their neighbours.
 #include <array>
 #include <cstdint>
 #include <vector>
 
 #include "core/progress.hpp"
 #include "geometry/oracle.hpp"
+#include "grid/tet_forest.hpp"
 #include "grid/tet_lattice.hpp"
 #include "radapt/radapt3.hpp"
 #include "samr/samr3.hpp"

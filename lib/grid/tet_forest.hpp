@@ -124,7 +124,6 @@ struct LeafWindow {
     w.reach = reach;
     return w;
   }
-  bool all() const { return reach < 0; }
   bool holds(const TetForest& forest, std::int32_t t) const {
     if (reach < 0) return true;
     const TetForest::Tet& x = forest.tet(t);

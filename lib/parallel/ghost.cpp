@@ -218,7 +218,6 @@ GhostRegion3 ghost_region3(const InclusionIndex3& index, const grid::Lattice<3>&
   if (margin <= 0) margin = coarsest < 0 ? 1 : ghost_margin3(coarsest);
   GhostRegion3 region = grow<3>(index, lattice, box, margin, rule.max_closure_rounds, rule.max_closure_rounds != 0);
   region.margin = margin;
-  region.level = coarsest;
   // Without inclusions nearby nothing snaps or swaps: the windows stay whole. Closure
   // rounds (a comparison of the old rule) keep them whole too.
   if (coarsest >= 0 && rule.max_closure_rounds == 0) {

@@ -134,7 +134,6 @@ struct GhostRegion {
   grid::CellRange<Dim> range;  // coarse cells whose state decides the box (clipped to the domain)
   int ghost = 0;               // uniform width that covers `range` (what pipeline::run2/run3 take)
   int margin = 0;              // 3D: the margin it was chosen with (coarse cubes)
-  int level = -1;              // 3D: the coarsest effective level near the box (-1: no inclusion)
   // 3D: r-adaptivity's and face swapping's windows, fine lattice units (-1: every leaf).
   std::int64_t radapt_reach = -1, swap_reach = -1;
   std::vector<std::int32_t> inclusions;  // scene indices, ascending

@@ -20,7 +20,6 @@ MeshParts<3> run_stages(const geometry::Oracle3& oracle, const grid::Lattice3& l
   const auto window = [&](std::int64_t reach) {
     return grid::LeafWindow::around(lattice, box, lattice.any_periodic() ? -1 : reach);
   };
-  const grid::LeafWindow radapt_window = window(ghost.radapt_reach);
   samr::RefinedGrid3 grid = [&] {
     ScopedPhase timer(&result.times, "samr");
     return samr::refine3(oracle, lattice, range, levels, options.progress);
@@ -34,10 +33,7 @@ MeshParts<3> run_stages(const geometry::Oracle3& oracle, const grid::Lattice3& l
   counters.refinements = grid.refinements;
   counters.samr_sweeps = grid.sweeps;
   for (std::int32_t t = 0; t < static_cast<std::int32_t>(grid.forest.size()); ++t)
-    if (grid.forest.is_leaf(t)) {
-      ++counters.leaves;
-      counters.snapping_leaves += radapt_window.holds(grid.forest, t) ? 1 : 0;
-    }
+    counters.leaves += grid.forest.is_leaf(t) ? 1 : 0;
 
   radapt::Nodes3 nodes = [&] {
     ScopedPhase timer(&result.times, "radapt");
@@ -45,7 +41,7 @@ MeshParts<3> run_stages(const geometry::Oracle3& oracle, const grid::Lattice3& l
                          radapt::Options3{.alpha = options.alpha, .alpha_diagonal = options.alpha_diagonal3,
                                           .max_candidates = options.max_candidates3,
                                           .bound = options.bound3,
-                                          .window = radapt_window,
+                                          .window = window(ghost.radapt_reach),
                                           .progress = options.progress});
   }();
   release_free_memory();
@@ -55,6 +51,7 @@ MeshParts<3> run_stages(const geometry::Oracle3& oracle, const grid::Lattice3& l
   counters.collapsed_nodes = nodes.collapsed_count;
   counters.collapsed_cut_points = nodes.collapsed_cut_points;
   counters.max_collapse_deviation = nodes.max_collapse_deviation;
+  counters.snapping_leaves = nodes.window_leaves;
   counters.guarded_leaves = nodes.guarded_leaves;
   counters.guard_combinations = nodes.combinations;
   counters.missing_crossings = nodes.missing_crossings;

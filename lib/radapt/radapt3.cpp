@@ -118,7 +118,7 @@ class Snapper {
     return option_begin_[static_cast<std::size_t>(v) + 1] - option_begin_[static_cast<std::size_t>(v)];
   }
 
-  // 1. Vertices of every leaf and their closure masks. A leaf that no boundary meets lies
+  // 1. Vertices of every leaf in the window and their closure masks. A leaf that no boundary meets lies
   //    inside one phase, so its vertices take that phase without asking the oracle per vertex.
   void register_nodes() {
     // About one node per four forest tets (five tets per cube at level 0, fewer with
@@ -140,6 +140,7 @@ class Snapper {
         ids = {-1, -1, -1, -1};
         continue;
       }
+      ++nodes_.window_leaves;
       const auto v = forest_.fine_vertices(t);
       const std::uint8_t level = forest_.tet(t).level;
       for (int i = 0; i < 4; ++i) {

@@ -11,7 +11,8 @@
 // a tetrahedron above `bound` (or an inverted one, or a leaf it cannot split) refuses one
 // option used in it. A node ends at its first option no leaf refused. Each leaf decides from
 // its own data, so the result does not depend on any visiting order and is the same on every
-// partition that sees the leaf; the combination that happens in a leaf is one the leaf
+// partition whose window (Options3::window) holds the leaf and a few cells around it; the
+// combination that happens in a leaf is one the leaf
 // checked, so no emitted tetrahedron exceeds `bound`. The last options of all vertices (all
 // staying, collapsed where they touch a phase change) keep the leaf whole and undeformed, so
 // every bad combination holds an option that can be refused.
@@ -26,6 +27,7 @@
 #include "core/types.hpp"
 #include "geometry/oracle.hpp"
 #include "grid/key_map.hpp"
+#include "grid/tet_forest.hpp"
 #include "grid/tet_lattice.hpp"
 #include "samr/samr3.hpp"
 
@@ -117,14 +119,14 @@ struct KeyPairHash {
 };
 using EdgeIndex = std::unordered_map<std::pair<grid::LatticeKey3, grid::LatticeKey3>, std::int32_t, KeyPairHash>;
 
-// The nodes of the refined forest: lattice keys, final positions and closure masks (one
+// The nodes of the refined forest's leaves (in the window): lattice keys, final positions and closure masks (one
 // bit inside a phase, two or more on an interface, or for a collapsed node).
 struct Nodes3 {
   std::vector<grid::LatticeKey3> key;  // canonical keys (lattice.hpp)
   std::vector<Vec3> position;
   std::vector<PhaseMask> mask;
   std::vector<NodeState> state;
-  // Per node, the finest level of the leaves around it. A leaf of level l can hold a node at
+  // Per node, the finest level of the (registered) leaves around it. A leaf of level l can hold a node at
   // an edge's midpoint only if a finer leaf touches one of the edge's ends.
   std::vector<std::uint8_t> finest_level;
   // Node ids of each leaf's vertices (fine_vertices order), indexed by forest tet;
@@ -147,6 +149,7 @@ struct Nodes3 {
   std::int64_t collapsed_cut_points = 0; // cut points standing for a gap thinner than their edge
   std::int64_t refused_count = 0;        // nodes that did not get their first option
   std::int64_t missing_crossings = 0;    // phase-changing edges without an oracle crossing
+  std::int64_t window_leaves = 0;        // leaves inside Options3::window (all of them by default)
   std::int64_t guarded_leaves = 0;       // leaves whose option combinations were checked
   std::int64_t combinations = 0;         // combinations checked
   double max_collapse_deviation = 0;     // largest distance of a collapsed node (or cut point) from a phase it serves
@@ -164,7 +167,7 @@ struct Nodes3 {
                                      [&](std::int32_t e, const auto& key) { return ends(e) < key; });
     return it != edge_order.end() && ends(*it) == k ? *it : -1;
   }
-  // Was leaf t inside the window (its vertices have nodes)?
+  // Was leaf t inside Options3::window (its vertices have nodes)? Meaningless for non-leaves.
   bool registered(std::int32_t t) const { return tet_nodes[static_cast<std::size_t>(t)][0] >= 0; }
   bool moved(std::int32_t n) const { return state[static_cast<std::size_t>(n)] == NodeState::snapped; }
   // Could leaf `t` (level `level`, vertices `ids`) carry a node at one of its edge midpoints?
@@ -179,7 +182,8 @@ struct Nodes3 {
   }
 };
 
-// Registers the vertices of every leaf, classifies them and decides every node's fate.
+// Registers the vertices of every leaf in the window (every leaf by default), classifies them
+// and decides every node's fate.
 Nodes3 snap3(const geometry::Oracle3& oracle, const samr::RefinedGrid3& grid, const Options3& options);
 
 }  // namespace cisamr::radapt

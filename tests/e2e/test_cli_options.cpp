@@ -106,6 +106,7 @@ TEST_F(CliOptions, NumericOptionsAreRangeCheckedNamingTheOption) {
       {"mesh " + s + " -o ''", "--output"},
       {"mesh " + s + " -o " + out() + " --ghost-cubes -5", "--ghost-cubes"},  // hidden options too
       {"mesh " + s + " -o " + out() + " --ghost-windows -2", "--ghost-windows"},
+      {"mesh " + s + " -o " + out() + " --ghost-closure-rounds abc", "--ghost-closure-rounds"},
       {"certify " + s + " --fidelity-tolerance nan", "--fidelity-tolerance"},
       {"certify " + s + " --bound 0.5", "--bound"},
       {"pack " + s + " -o x.json --seed abc", "--seed"},

@@ -269,7 +269,9 @@ TEST(Invariance3, WindowsLeaveOutTheGhostsOuterPart) {
 
 // The tests can fail: with windows of half a cell, nodes on the box faces miss the options
 // and refusals of the leaves beyond them (measured: one cell is the least these scenes pass
-// with, at 7, 8, 27 and 64 partitions; README.md, "Ghost region (3D)").
+// with, at 7, 8, 27 and 64 partitions; README.md, "Ghost region (3D)"). Half a cell of the
+// deciding level is a whole number of fine cells only below Lmax (these scenes have
+// extra levels); at Lmax the window would round up to a whole cell.
 TEST(Invariance3, TooSmallWindowBreaksIt) {
   GhostRule narrow;
   narrow.radapt_window_cells3 = narrow.swap_window_cells3 = 0.5;
