@@ -1,7 +1,6 @@
 // cisamr mesh: parses the options, meshes through driver::mesh_scene (sequential, or the
 // parallel mesher with --partitions N or under mpiexec), writes, prints (mesh_summary.cpp).
 // Every rank runs all of this; only rank 0 prints and writes the report.
-#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -70,13 +69,6 @@ void run_mesh(MeshArgs& args, const GlobalFlags& flags, int& exit_code) {
   const Comm& comm = parallel::world();
   driver::Options& options = args.options;
   options.ghost.level_aware = !args.fixed_ghost;
-  // --ghost-windows C (3D comparisons): face swapping's window follows r-adaptivity's.
-  parallel::GhostRule& ghost = options.ghost;
-  if (ghost.radapt_window_cells3 != 0)
-    ghost.swap_window_cells3 = ghost.radapt_window_cells3 < 0
-                                   ? -1.0
-                                   : std::max(0.5, ghost.radapt_window_cells3 -
-                                                       (parallel::kRadaptWindow3 - parallel::kSwapWindow3));
   options.figures = !args.report.empty();
   options.svg_slice = {.axis = args.svg_axis[0] - 'x', .at = args.svg_at};
   // Progress: drawn on rank 0, for the slowest rank (flags are alike on every rank, so every

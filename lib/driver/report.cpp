@@ -46,10 +46,11 @@ std::string ghost_rule(int dim, const parallel::GhostRule& rule) {
       s << cells;
       return s.str();
     };
-    if (rule.radapt_window_cells3 < 0 && rule.swap_window_cells3 < 0)
+    const double swap = rule.swap_window3_cells();
+    if (rule.radapt_window_cells3 < 0 && swap < 0)
       name += "-whole-ghost";
-    else if (rule.radapt_window_cells3 != 0 || rule.swap_window_cells3 != 0)
-      name += "-windows-" + text(rule.radapt_window_cells3) + "-" + text(rule.swap_window_cells3);
+    else if (rule.radapt_window_cells3 != 0 || swap != 0)
+      name += "-windows-" + text(rule.radapt_window_cells3) + "-" + text(swap);
     return name;
   }
   return rule.level_aware ? "level-aware" : "fixed-" + std::to_string(static_cast<int>(rule.fixed_cells)) + "-cells";

@@ -219,15 +219,16 @@ GhostRegion3 ghost_region3(const InclusionIndex3& index, const grid::Lattice<3>&
   GhostRegion3 region = grow<3>(index, lattice, box, margin, rule.max_closure_rounds, rule.max_closure_rounds != 0);
   region.margin = margin;
   // Without inclusions nearby nothing snaps or swaps: the windows stay whole. Closure
-  // rounds (a comparison of the old rule) keep them whole too.
-  if (coarsest >= 0 && rule.max_closure_rounds == 0) {
+  // rounds (a comparison of the old rule) keep them whole too, and so does a periodic
+  // lattice (its ghost wraps around the period in frame coordinates).
+  if (coarsest >= 0 && rule.max_closure_rounds == 0 && !lattice.any_periodic()) {
     const auto reach = [&](double forced, int derived) -> std::int64_t {
       if (forced < 0) return -1;
       const double cells = forced > 0 ? forced : derived;
       return static_cast<std::int64_t>(std::ceil(cells * static_cast<double>(lattice.units(std::min(coarsest, lattice.max_level)))));
     };
     region.radapt_reach = reach(rule.radapt_window_cells3, kRadaptWindow3);
-    region.swap_reach = reach(rule.swap_window_cells3, kSwapWindow3);
+    region.swap_reach = reach(rule.swap_window3_cells(), kSwapWindow3);
   }
   return region;
 }

@@ -78,8 +78,16 @@ struct GhostRule {
   // 3D: the windows of r-adaptivity and face swapping, in cells of the deciding level
   // (pipeline::Ghost). 0 (default): kRadaptWindow3 and kSwapWindow3; > 0: that many
   // (comparisons, and the tests that show a too small window breaks invariance); < 0: every
-  // leaf of the ghost (as before the windows).
+  // leaf of the ghost (as before the windows). Face swapping's at 0 follows a forced
+  // r-adaptivity's (swap_window3_cells()).
   double radapt_window_cells3 = 0, swap_window_cells3 = 0;
+  // Face swapping's window in use when r-adaptivity's is forced and its own is not: that
+  // less the cells between them (kRadaptWindow3 − kSwapWindow3), at least ½; -1 with -1.
+  double swap_window3_cells() const {
+    if (swap_window_cells3 != 0 || radapt_window_cells3 == 0) return swap_window_cells3;
+    if (radapt_window_cells3 < 0) return -1;
+    return std::max(0.5, radapt_window_cells3 - (kRadaptWindow3 - kSwapWindow3));
+  }
   // Rounds of the closure "add every inclusion whose inflated box meets an added one's".
   // 0 (default): none. pipeline::effective_levels2/3 settle every level that rule R4 could
   // carry from one inclusion to another before meshing, so what decides a cell lies within

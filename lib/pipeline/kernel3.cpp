@@ -16,10 +16,7 @@ MeshParts<3> run_stages(const geometry::Oracle3& oracle, const grid::Lattice3& l
                         const Ghost& ghost, const Options& options, std::span<const int> levels, Result<3>& result) {
   Counters<3>& counters = result.counters;
   const grid::CellRange<3> range = ghosted_range(lattice, box, ghost.cubes);
-  // On a periodic lattice the ghost wraps around the period (frame coordinates): every leaf.
-  const auto window = [&](std::int64_t reach) {
-    return grid::LeafWindow::around(lattice, box, lattice.any_periodic() ? -1 : reach);
-  };
+  const auto window = [&](std::int64_t reach) { return grid::LeafWindow::around(lattice, box, reach); };
   samr::RefinedGrid3 grid = [&] {
     ScopedPhase timer(&result.times, "samr");
     return samr::refine3(oracle, lattice, range, levels, options.progress);

@@ -98,7 +98,8 @@ MeshEstimate estimate_mesh(const geometry::SceneDesc& scene);
 // What a partition's kernel takes around its box (lib/parallel/README.md, "Ghost region").
 // SAMR builds its forest on `cubes` coarse cells on each side; in 3D r-adaptivity and face
 // swapping then work only on the leaves within their reach of the box (fine lattice units,
-// grid::LeafWindow; -1: every leaf), which is all their decisions in the box read.
+// grid::LeafWindow; -1: every leaf), which is all their decisions in the box read. Windows
+// need the box and the forest in one frame: not on a periodic lattice (-1 there).
 struct Ghost {
   int cubes = 0;
   std::int64_t radapt_reach = -1;
