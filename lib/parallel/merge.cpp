@@ -224,7 +224,7 @@ NumberedPiece<Dim> merge_keys(const Comm& comm, std::vector<PartitionOutput<Dim>
   mesh::SimplexMesh<Dim> cells;
   IdentityMap<Key> by_key(1024);
 
-  // 1. Merge this rank's partitions by identity (unshared points get ids without lookup).
+  // 1. Merge this rank's partitions by identity (nodes off the inner faces get ids without lookup).
   run_collectively(comm, [&] {
     const std::int64_t unit = lattice.units(0);
     for (PartitionOutput<Dim>& part : parts) {
@@ -239,10 +239,13 @@ NumberedPiece<Dim> merge_keys(const Comm& comm, std::vector<PartitionOutput<Dim>
           key = {part.result.node_identity[n], m.node_phase[n]};
         else
           key = part.result.node_identity[n];
-        const bool unshared = identity_part(key) == pipeline::Result<Dim>::kUnshared;
+        // Two partitions emit one node only on the plane between their boxes, an inner face
+        // of both: only such nodes are looked up (and exchanged), the others get new ids.
+        bool face = identity_part(key) != pipeline::Result<Dim>::kUnshared;
+        for (std::uint64_t k : Id::lattice_keys(identity_part(key))) face = face && on_inner_face(k);
         const auto next = static_cast<std::int32_t>(keys.size());
         bool inserted = true;
-        const std::int32_t id = unshared ? next : by_key.insert(key, next, inserted);
+        const std::int32_t id = face ? by_key.insert(key, next, inserted) : next;
         local[n] = id;
         if (!inserted) {
           for (int d = 0; d < Dim; ++d)
@@ -254,12 +257,7 @@ NumberedPiece<Dim> merge_keys(const Comm& comm, std::vector<PartitionOutput<Dim>
           keys.push_back(key);
           for (int d = 0; d < Dim; ++d) coords.push_back(m.coords[Dim * n + d]);
           first_part.push_back(static_cast<std::int32_t>(&part - parts.data()));
-          on_face.push_back(0);
-        }
-        if (!unshared) {
-          bool face = true;
-          for (std::uint64_t k : Id::lattice_keys(identity_part(key))) face = face && on_inner_face(k);
-          if (face) on_face[static_cast<std::size_t>(id)] = 1;
+          on_face.push_back(face ? 1 : 0);
         }
       }
       for (std::size_t c = 0; c < m.cell_count(); ++c) {
