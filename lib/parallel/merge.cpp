@@ -227,9 +227,53 @@ NumberedPiece<Dim> merge_keys(const Comm& comm, std::vector<PartitionOutput<Dim>
   // 1. Merge this rank's partitions by identity (nodes off the inner faces get ids without lookup).
   run_collectively(comm, [&] {
     const std::int64_t unit = lattice.units(0);
+    // Sized once: the tables never grow by copying (nor hold twice their size at the peak).
+    std::size_t total_nodes = 0, total_cells = 0;
+    for (const PartitionOutput<Dim>& part : parts)
+      total_nodes += part.result.mesh.node_count(), total_cells += part.result.mesh.cell_count();
+    keys.reserve(total_nodes);
+    coords.reserve(Dim * total_nodes);
+    first_part.reserve(total_nodes);
+    on_face.reserve(total_nodes);
+    cells.cell_nodes.reserve(kCorners * total_cells);
+    cells.cell_phase.reserve(total_cells);
+    cells.cell_partition.reserve(total_cells);
     for (PartitionOutput<Dim>& part : parts) {
-      const auto& m = part.result.mesh;
+      auto& m = part.result.mesh;
       const auto on_inner_face = [&](std::uint64_t key) { return on_inner_face_of<Dim>(key, part.box, lattice, unit); };
+      if constexpr (!kSided) {
+        // A rank's first partition emits each identity once: its nodes and cells keep their
+        // ids, so they are moved here instead of copied (the whole merge of one partition
+        // per rank); only its face identities enter the table.
+        if (keys.empty()) {
+          const std::size_t nodes = m.node_count();
+          keys = std::move(part.result.node_identity);
+          coords = std::move(m.coords);
+          first_part.assign(nodes, static_cast<std::int32_t>(&part - parts.data()));
+          on_face.assign(nodes, 0);
+          for (std::size_t n = 0; n < nodes; ++n) {
+            bool face = keys[n] != pipeline::Result<Dim>::kUnshared;
+            for (std::uint64_t k : Id::lattice_keys(keys[n])) face = face && on_inner_face(k);
+            if (!face) continue;
+            on_face[n] = 1;
+            bool inserted = false;
+            by_key.insert(keys[n], static_cast<std::int32_t>(n), inserted);
+            if (!inserted)
+              throw std::logic_error("partition " + std::to_string(part.partition) + " emits " +
+                                     key_name<Dim>(keys[n]) + " twice");
+          }
+          cells.cell_nodes = std::move(m.cell_nodes);
+          cells.cell_phase = std::move(m.cell_phase);
+          cells.cell_partition.assign(cells.cell_phase.size(), part.partition);
+          cells.cell_nodes.reserve(kCorners * total_cells);
+          cells.cell_phase.reserve(total_cells);
+          cells.cell_partition.reserve(total_cells);
+          keys.reserve(total_nodes);
+          coords.reserve(Dim * total_nodes);
+          part.result = pipeline::Result<Dim>{};
+          continue;
+        }
+      }
       std::vector<std::int32_t> local(m.node_count());
       if (kSided && m.node_phase.size() != m.node_count())
         throw std::logic_error("merge: a cohesive partition without node phases");
