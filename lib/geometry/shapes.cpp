@@ -97,7 +97,9 @@ bool shapes_overlap(const Shape& a, const Shape& b, double gap) {
   if (&fa == &fb)
     if (const std::optional<bool> exact = fa.overlap_same_family(a, b, gap)) return *exact;
   // Convex pairs: they are apart by more than gap iff some direction d separates them,
-  // h_a(d) + h_b(−d) < −gap. Search d on the circle: sampling, then golden section.
+  // h_a(d) + h_b(−d) < −gap. Search d on the circle: sampling, then golden section. The
+  // answer is whether the least value found is ≥ −gap, so the first value below −gap
+  // settles it: most apart pairs stop within the samples.
   if (fa.convex(a) && fb.convex(b)) {
     auto g = [&](double ang) {
       const Vec3 d{std::cos(ang), std::sin(ang), 0};
@@ -108,12 +110,14 @@ bool shapes_overlap(const Shape& a, const Shape& b, double gap) {
     int arg = 0;
     for (int i = 0; i < n; ++i) {
       const double v = g(2 * M_PI * i / n);
+      if (v < -gap) return false;
       if (v < best) best = v, arg = i;
     }
     double lo = 2 * M_PI * (arg - 1) / n, hi = 2 * M_PI * (arg + 1) / n;
     const double phi = 0.5 * (std::sqrt(5.0) - 1);
     double x1 = hi - phi * (hi - lo), x2 = lo + phi * (hi - lo), f1 = g(x1), f2 = g(x2);
     for (int it = 0; it < 80; ++it) {
+      if (f1 < -gap || f2 < -gap) return false;
       if (f1 < f2) hi = x2, x2 = x1, f2 = f1, x1 = hi - phi * (hi - lo), f1 = g(x1);
       else lo = x1, x1 = x2, f1 = f2, x2 = lo + phi * (hi - lo), f2 = g(x2);
     }
