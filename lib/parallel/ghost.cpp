@@ -201,7 +201,7 @@ int ghost_margin3(int level) {
 template <int Dim>
 GhostRegion<Dim> ghost_region(const InclusionIndex<Dim>& index, const grid::Lattice<Dim>& lattice,
                               const grid::CellRange<Dim>& box, const GhostRule& rule) {
-  return grow<Dim>(index, lattice, box, rule.box_margin_cells, rule.max_closure_rounds, true);
+  return grow<Dim>(index, lattice, box, rule.box_margin_cells, rule.max_closure_rounds, rule.max_closure_rounds != 0);
 }
 
 GhostRegion3 ghost_region3(const InclusionIndex3& index, const grid::Lattice<3>& lattice, const grid::CellRange<3>& box,

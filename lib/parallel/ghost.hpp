@@ -153,9 +153,11 @@ pipeline::Ghost kernel_ghost(const GhostRegion<Dim>& region) {
 using GhostRegion2 = GhostRegion<2>;
 using GhostRegion3 = GhostRegion<3>;
 
-// The inclusions whose inflated box meets the box grown by rule.box_margin_cells, then
+// The coarse cells of the box grown by rule.box_margin_cells (clipped to the domain) and the
+// inclusions whose inflated box meets them. With closure rounds (a comparison only):
 // `rule.max_closure_rounds` rounds of "add every inclusion whose inflated box meets an
-// added one's". The range covers the grown box and every added inflated box.
+// added one's", and the range also covers every added inflated box (as before effective
+// levels settled what the closure carried).
 template <int Dim>
 GhostRegion<Dim> ghost_region(const InclusionIndex<Dim>& index, const grid::Lattice<Dim>& lattice,
                               const grid::CellRange<Dim>& box, const GhostRule& rule);

@@ -71,6 +71,18 @@ TEST(GhostRegion, DefaultLoadsTheInclusionsMeetingTheGrownBox) {
     if (boxes_overlap(index.inflated(k), seed)) expected.push_back(k);
   EXPECT_EQ(region.inclusions, expected);
   EXPECT_LT(region.inclusions.size(), scene.inclusions.size());
+  // Only the grown box's cells are meshed, not the loaded inclusions' boxes, some of which
+  // reach beyond it.
+  bool beyond = false;
+  for (std::int32_t k : region.inclusions)
+    for (int d = 0; d < 2; ++d)
+      beyond = beyond || index.inflated(k).min[d] < seed.min[d] || index.inflated(k).max[d] > seed.max[d];
+  EXPECT_TRUE(beyond);
+  const auto margin = static_cast<std::int64_t>(rule.box_margin_cells);
+  for (int d = 0; d < 2; ++d) {
+    EXPECT_EQ(region.range.lo[d], std::max<std::int64_t>(0, box.lo[d] - margin));
+    EXPECT_EQ(region.range.hi[d], std::min<std::int64_t>(lattice.coarse_cells[d], box.hi[d] + margin));
+  }
 }
 
 // The full closure, kept for comparison (--ghost-closure-rounds -1).
