@@ -227,17 +227,21 @@ NumberedPiece<Dim> merge_keys(const Comm& comm, std::vector<PartitionOutput<Dim>
   // 1. Merge this rank's partitions by identity (nodes off the inner faces get ids without lookup).
   run_collectively(comm, [&] {
     const std::int64_t unit = lattice.units(0);
-    // Sized once: the tables never grow by copying (nor hold twice their size at the peak).
+    // Sized once (without cohesive cells: after the first partition's tables are moved in,
+    // which costs one copy of those when the rank holds more partitions): the tables do not
+    // grow by doubling (nor hold up to twice their size at the peak).
     std::size_t total_nodes = 0, total_cells = 0;
     for (const PartitionOutput<Dim>& part : parts)
       total_nodes += part.result.mesh.node_count(), total_cells += part.result.mesh.cell_count();
-    keys.reserve(total_nodes);
-    coords.reserve(Dim * total_nodes);
     first_part.reserve(total_nodes);
     on_face.reserve(total_nodes);
-    cells.cell_nodes.reserve(kCorners * total_cells);
-    cells.cell_phase.reserve(total_cells);
     cells.cell_partition.reserve(total_cells);
+    if constexpr (kSided) {
+      keys.reserve(total_nodes);
+      coords.reserve(Dim * total_nodes);
+      cells.cell_nodes.reserve(kCorners * total_cells);
+      cells.cell_phase.reserve(total_cells);
+    }
     for (PartitionOutput<Dim>& part : parts) {
       auto& m = part.result.mesh;
       const auto on_inner_face = [&](std::uint64_t key) { return on_inner_face_of<Dim>(key, part.box, lattice, unit); };
@@ -246,6 +250,8 @@ NumberedPiece<Dim> merge_keys(const Comm& comm, std::vector<PartitionOutput<Dim>
         // ids, so they are moved here instead of copied (the whole merge of one partition
         // per rank); only its face identities enter the table.
         if (keys.empty()) {
+          if (m.cohesive.count() != 0 || !m.node_phase.empty())
+            throw std::logic_error("merge: cohesive cells in a merge without cohesive keys");
           const std::size_t nodes = m.node_count();
           keys = std::move(part.result.node_identity);
           coords = std::move(m.coords);

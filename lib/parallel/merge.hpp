@@ -52,8 +52,10 @@ using NumberedPiece3 = NumberedPiece<3>;
 // cells there are all void). Global ids: owned nodes first, offset = exclusive scan of the
 // owned counts, in (owner partition, kernel output order). Identities on partition faces
 // are exchanged with a rendezvous rank (hash of the identity), so corners shared by boxes
-// that touch only diagonally need no special case. Throws std::logic_error (a bug, not bad
-// input) when two partitions give the same identity different coordinates. Empties the
+// that touch only diagonally need no special case. Only identities on an inner face of
+// their partition's box are looked up (two boxes share no other point): throws
+// std::logic_error (a bug, not bad input) when two partitions give such an identity
+// different coordinates, or a rank's first partition emits one twice. Empties the
 // kernel results as it goes. `cohesive` (the same on every rank): the partitions' nodes are
 // copies named (identity, node_phase), merged by that pair; their cohesive cells are carried
 // and node_phase is set.

@@ -377,6 +377,25 @@ TEST(Merge, DifferentCoordinatesForOneKeyAreABug) {
   }
 }
 
+// A rank's first partition is moved into the piece, not merged with itself: an identity
+// on its face twice is a bug, reported as such.
+TEST(Merge, AFaceIdentityTwiceInOnePartitionIsABug) {
+  const grid::Lattice2 lattice{{0, 0}, 1.0, 0, {2, 1}};
+  std::vector<PartitionOutput2> parts(1);
+  parts[0].box = {{0, 0}, {1, 1}};
+  auto& r = parts[0].result;
+  r.mesh.coords = {0, 0, 1, 0, 1, 1, 0, 1};
+  r.mesh.cell_nodes = {0, 1, 2, 0, 2, 3};
+  r.mesh.cell_phase = {1, 1};
+  r.node_identity = {grid::key2(0, 0), grid::key2(1, 0), grid::key2(1, 0), grid::key2(0, 1)};
+  try {
+    merge_and_number2(kSerial, parts, lattice);
+    FAIL();
+  } catch (const CollectiveInternalError& e) {
+    EXPECT_STREQ(e.what(), "partition 0 emits lattice node (1, 0) twice");
+  }
+}
+
 TEST(Collective, ErrorsKeepTheirKindAndText) {
   try {
     run_collectively(kSerial, [] { throw InputError("a.json", "inclusions[2].radius", "must be positive"); });
