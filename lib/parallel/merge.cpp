@@ -109,6 +109,18 @@ bool on_inner_face_of(std::uint64_t key, const grid::CellRange<Dim>& box, const 
   return false;
 }
 
+// May another partition emit the node `id` of a partition with box `box`? Two boxes share
+// only the plane between them, an inner face of both: a lattice node must lie on one, a cut
+// node's edge too (both ends), a closure Steiner point never is shared.
+template <int Dim>
+bool on_inner_faces(const typename Identities<Dim>::Key& id, const grid::CellRange<Dim>& box,
+                    const grid::Lattice<Dim>& lattice, std::int64_t unit) {
+  if (id == pipeline::Result<Dim>::kUnshared) return false;
+  for (std::uint64_t k : Identities<Dim>::lattice_keys(id))
+    if (!on_inner_face_of<Dim>(k, box, lattice, unit)) return false;
+  return true;
+}
+
 // The (key, value) pairs packed one after another in every rank's bytes.
 template <class Key, class Value>
 std::vector<std::pair<Key, Value>> unpack_pairs(const std::vector<Bytes>& received) {
@@ -244,7 +256,7 @@ NumberedPiece<Dim> merge_keys(const Comm& comm, std::vector<PartitionOutput<Dim>
     }
     for (PartitionOutput<Dim>& part : parts) {
       auto& m = part.result.mesh;
-      const auto on_inner_face = [&](std::uint64_t key) { return on_inner_face_of<Dim>(key, part.box, lattice, unit); };
+      const auto may_be_shared = [&](const typename Id::Key& id) { return on_inner_faces<Dim>(id, part.box, lattice, unit); };
       if constexpr (!kSided) {
         // A rank's first partition emits each identity once: its nodes and cells keep their
         // ids, so they are moved here instead of copied (the whole merge of one partition
@@ -258,9 +270,7 @@ NumberedPiece<Dim> merge_keys(const Comm& comm, std::vector<PartitionOutput<Dim>
           first_part.assign(nodes, static_cast<std::int32_t>(&part - parts.data()));
           on_face.assign(nodes, 0);
           for (std::size_t n = 0; n < nodes; ++n) {
-            bool face = keys[n] != pipeline::Result<Dim>::kUnshared;
-            for (std::uint64_t k : Id::lattice_keys(keys[n])) face = face && on_inner_face(k);
-            if (!face) continue;
+            if (!may_be_shared(keys[n])) continue;
             on_face[n] = 1;
             bool inserted = false;
             by_key.insert(keys[n], static_cast<std::int32_t>(n), inserted);
@@ -289,10 +299,8 @@ NumberedPiece<Dim> merge_keys(const Comm& comm, std::vector<PartitionOutput<Dim>
           key = {part.result.node_identity[n], m.node_phase[n]};
         else
           key = part.result.node_identity[n];
-        // Two partitions emit one node only on the plane between their boxes, an inner face
-        // of both: only such nodes are looked up (and exchanged), the others get new ids.
-        bool face = identity_part(key) != pipeline::Result<Dim>::kUnshared;
-        for (std::uint64_t k : Id::lattice_keys(identity_part(key))) face = face && on_inner_face(k);
+        // Only nodes another partition may emit are looked up (and exchanged); the others get new ids.
+        const bool face = may_be_shared(identity_part(key));
         const auto next = static_cast<std::int32_t>(keys.size());
         bool inserted = true;
         const std::int32_t id = face ? by_key.insert(key, next, inserted) : next;
@@ -396,17 +404,13 @@ NumberedPiece<Dim> merge_and_number(const Comm& comm, std::vector<PartitionOutpu
 
 template <int Dim>
 PartitionFaces<Dim> partition_faces(const PartitionOutput<Dim>& part, const grid::Lattice<Dim>& lattice) {
-  using Id = Identities<Dim>;
   PartitionFaces<Dim> out;
   out.partition = part.partition;
   out.nodes = static_cast<std::int64_t>(part.result.mesh.node_count());
   const std::int64_t unit = lattice.units(0);
   for (std::size_t n = 0; n < part.result.node_identity.size(); ++n) {
     const auto& key = part.result.node_identity[n];
-    if (key == pipeline::Result<Dim>::kUnshared) continue;
-    bool face = true;
-    for (std::uint64_t k : Id::lattice_keys(key)) face = face && on_inner_face_of<Dim>(k, part.box, lattice, unit);
-    if (!face) continue;
+    if (!on_inner_faces<Dim>(key, part.box, lattice, unit)) continue;
     out.local.push_back(static_cast<std::int32_t>(n));
     out.identity.push_back(key);
   }
