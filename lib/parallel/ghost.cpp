@@ -194,8 +194,9 @@ GhostRegion<Dim> grow(const InclusionIndex<Dim>& index, const grid::Lattice<Dim>
 
 }  // namespace
 
-int ghost_margin3(int level) {
-  return static_cast<int>(std::ceil(kSamrReach3 + std::ldexp(kKernelReach3, -std::max(0, level)))) + kGhostSafety3;
+int ghost_margin3(int level, int max_level) {
+  const double samr_reach = std::min(kSamrReach3, samr::reach_coarse_cells3(std::max(0, max_level)));
+  return static_cast<int>(std::ceil(samr_reach + std::ldexp(kKernelReach3, -std::max(0, level)))) + kGhostSafety3;
 }
 
 template <int Dim>
@@ -215,7 +216,7 @@ GhostRegion3 ghost_region3(const InclusionIndex3& index, const grid::Lattice<3>&
     coarsest = coarsest < 0 ? l : std::min(coarsest, l);
   }
   int margin = static_cast<int>(std::ceil(rule.margin3_cubes));
-  if (margin <= 0) margin = coarsest < 0 ? 1 : ghost_margin3(coarsest);
+  if (margin <= 0) margin = coarsest < 0 ? 1 : ghost_margin3(coarsest, lattice.max_level);
   GhostRegion3 region = grow<3>(index, lattice, box, margin, rule.max_closure_rounds, rule.max_closure_rounds != 0);
   region.margin = margin;
   // Without inclusions nearby nothing snaps or swaps: the windows stay whole. Closure

@@ -38,10 +38,11 @@ inline constexpr double kDefaultGhostCells = kGhostFactor2 * kKernelReach2;
 
 // 3D (README.md, "Ghost region (3D)"): how far a decision about a cell of the box can look
 // beyond the box's face, on data the partition must hold exactly as the whole-domain run
-// holds it: the SAMR forest is right 2 coarse cubes inside the region
-// (samr::kReachCoarseCells3), and on top of it the snapping guard (3), face swapping (5)
-// and subdivision (3) read cells of the level of the leaves that decide.
-inline constexpr double kSamrReach3 = samr::kReachCoarseCells3;  // coarse cubes
+// holds it: the SAMR forest is right samr::reach_coarse_cells3(Lmax) coarse cubes inside
+// the region (at most samr::kReachCoarseCells3 = 2), and on top of it the snapping guard
+// (3), face swapping (5) and subdivision (3) read cells of the level of the leaves that
+// decide.
+inline constexpr double kSamrReach3 = samr::kReachCoarseCells3;  // coarse cubes, any Lmax
 inline constexpr double kKernelReach3 =                          // cells of the deciding level
     std::max({radapt::kReachCells3, faceswap::kReachCells3, subdivide::kReachCells3});
 inline constexpr int kGhostSafety3 = 1;  // coarse cubes on top of the bound
@@ -56,9 +57,12 @@ inline constexpr int kSwapWindow3 = faceswap::kCompetitorCells3 + kWindowSafety3
 inline constexpr int kRadaptWindow3 = kSwapWindow3 + 1 + radapt::kReachCells3;
 
 // Coarse cubes of ghost a 3D box needs when the coarsest effective level among the
-// inclusions near it is `level`: ⌈kSamrReach3 + kKernelReach3 / 2^level⌉ + kGhostSafety3
-// (8 at level 0, 6 at level 1, 5 at level 2, 4 from level 3 on).
-int ghost_margin3(int level);
+// inclusions near it is `level` and the lattice's finest is `max_level`:
+// ⌈samr::reach_coarse_cells3(max_level) + kKernelReach3 / 2^level⌉ + kGhostSafety3, both
+// reaches counted in cells of their levels (Lmax 2, level 2: ⌈1.5 + 1.25⌉ + 1 = 4). Without
+// `max_level`, the bound for any Lmax: ⌈kSamrReach3 + kKernelReach3 / 2^level⌉ +
+// kGhostSafety3 (8 at level 0, 6 at level 1, 5 at level 2, 4 from level 3 on), the widest.
+int ghost_margin3(int level, int max_level = 64);
 
 struct GhostRule {
   // 2D: margin around every inclusion's bounding box. Level-aware (default):
@@ -71,7 +75,8 @@ struct GhostRule {
   double box_margin_cells = kDefaultGhostCells;
   // 3D: coarse cubes around the box, meshed, whose inclusions are all loaded. 0 (default):
   // ghost_margin3 of the coarsest effective level among the inclusions within
-  // ghost_margin3(0) cubes of the box (1 when there is none); > 0: that many (comparisons,
+  // ghost_margin3(0) cubes of the box and of the lattice's Lmax (1 when there is no
+  // inclusion there); > 0: that many (comparisons,
   // and the tests that show a too small ghost breaks invariance). In 3D inclusion boxes
   // are not inflated (level_aware and fixed_cells are 2D rules): the margin covers that.
   double margin3_cubes = 0;

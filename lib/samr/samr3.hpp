@@ -34,6 +34,14 @@ namespace cisamr::samr {
 // band), so from level-L cut leaves h_{L-1} + h_{L-2} + ... + h_0 < 2 coarse cells,
 // whatever the number of sweeps (lib/parallel/README.md, "Ghost region (3D)").
 inline constexpr int kReachCoarseCells3 = 2;
+// The same sum for a forest no finer than `max_level` (its lattice's Lmax): the reach in
+// coarse cells counted in cells of each level, 2 − 2^(1 − Lmax) (0 at Lmax = 0: nothing
+// refines; 1 at Lmax = 1; 1.5 at 2), instead of the bound 2 for any Lmax.
+constexpr double reach_coarse_cells3(int max_level) {
+  double reach = 0, cell = 1;
+  for (int level = 0; level < max_level; ++level, cell /= 2) reach += cell;
+  return reach;
+}
 
 // Per tet (TouchLists): inclusions whose boundary meets the tet's closed bounding box.
 // Conservative: a tet with an empty list lies inside one phase.

@@ -103,13 +103,24 @@ TEST(Scenes3, AreValid) {
   for (const auto& c : testing::invariance_cases3()) EXPECT_NO_THROW(geometry::Oracle3{testing::with_triangles(c.scene)}) << c.name;
 }
 
-// ⌈2 + 5/2^l⌉ + 1 coarse cubes, chosen by the coarsest effective level near the box.
+// ⌈SAMR's reach + 5/2^l⌉ + 1 coarse cubes, chosen by the coarsest effective level l near the
+// box; SAMR's reach h_0 + … + h_{Lmax−1} (2 for any Lmax).
 TEST(GhostMargin3, FollowsTheCoarsestLevelNearTheBox) {
   EXPECT_EQ(ghost_margin3(0), 8);
   EXPECT_EQ(ghost_margin3(1), 6);
   EXPECT_EQ(ghost_margin3(2), 5);
   EXPECT_EQ(ghost_margin3(3), 4);
   EXPECT_EQ(ghost_margin3(6), 4);
+  EXPECT_EQ(samr::reach_coarse_cells3(0), 0.0);
+  EXPECT_EQ(samr::reach_coarse_cells3(1), 1.0);
+  EXPECT_EQ(samr::reach_coarse_cells3(2), 1.5);
+  EXPECT_EQ(samr::reach_coarse_cells3(3), 1.75);
+  EXPECT_EQ(ghost_margin3(0, 0), 6);  // nothing refines: the kernel's 5 cubes and the safety
+  EXPECT_EQ(ghost_margin3(0, 2), 8);
+  EXPECT_EQ(ghost_margin3(1, 1), 5);
+  EXPECT_EQ(ghost_margin3(1, 3), 6);
+  EXPECT_EQ(ghost_margin3(2, 2), 4);
+  EXPECT_EQ(ghost_margin3(3, 3), 4);
   geometry::SceneDesc s;
   s.dimension = 3;
   s.domain_max = {8, 4, 4};
@@ -117,7 +128,9 @@ TEST(GhostMargin3, FollowsTheCoarsestLevelNearTheBox) {
   s.phases = {{1, "m", false}, {2, "a", false}};
   s.inclusions.push_back({geometry::Sphere{{2.0, 2.0, 2.0}, 0.2}, 2, 2});
   s.inclusions.push_back({geometry::Sphere{{6.0, 2.0, 2.0}, 0.2}, 2, 0});  // 27 cubes from the box
+  // Lmax = 2 + the default 3 extra levels: SAMR may reach 1.94 cubes, ⌈1.94 + 1.25⌉ + 1.
   const auto lattice = scene_lattice<3>(s, {});
+  ASSERT_EQ(lattice.max_level, 5);
   const InclusionIndex3 index(s, lattice, GhostRule{});
   const grid::CellRange<3> box{{8, 8, 8}, {24, 24, 24}};  // x in [1, 3]
   std::vector<int> levels{2, 0};
@@ -127,6 +140,16 @@ TEST(GhostMargin3, FollowsTheCoarsestLevelNearTheBox) {
   EXPECT_EQ(r.range.lo[0], 3);
   EXPECT_EQ(r.range.hi[0], 29);
   EXPECT_EQ(r.inclusions, (std::vector<std::int32_t>{0}));
+  // Without extra levels (Lmax 2) SAMR reaches 1.5 cubes: ⌈1.5 + 1.25⌉ + 1.
+  pipeline::Options no_extra;
+  no_extra.extra_levels = 0;
+  const auto lattice2 = scene_lattice<3>(s, no_extra);
+  ASSERT_EQ(lattice2.max_level, 2);
+  const InclusionIndex3 index2(s, lattice2, GhostRule{});
+  r = ghost_region3(index2, lattice2, box, GhostRule{}, levels);
+  EXPECT_EQ(r.margin, 4);
+  EXPECT_EQ(r.range.lo[0], 4);
+  EXPECT_EQ(r.range.hi[0], 28);
   // The level-0 sphere within 8 cubes of the box: its margin, and it is loaded.
   s.inclusions[1].shape = geometry::Sphere{{3.7, 2.0, 2.0}, 0.2};
   const InclusionIndex3 near(s, lattice, GhostRule{});
@@ -227,6 +250,31 @@ TEST(Invariance3, SixtyFourPartitions) {
     for (int a = 0; a < 3; ++a)
       inside += p.lattice_min[a] - p.ghost > 0 || p.lattice_max[a] + p.ghost < (a < 2 ? 32 : 16) ? 1 : 0;
   EXPECT_GT(inside, 64);
+}
+
+// Without extra levels (Lmax = the scenes' levels, as E4 is meshed) SAMR reaches 1 cube at
+// Lmax 1 and 1.5 at Lmax 2, so the default ghost is one cube narrower (5 and 4 instead of 6
+// and 5): still the whole-domain mesh.
+TEST(Invariance3, WithoutExtraLevelsTheGhostIsNarrower) {
+  pipeline::Options no_extra;
+  no_extra.extra_levels = 0;
+  const std::vector<std::pair<geometry::SceneDesc, int>> scenes{{testing::packed_scene3(12, 1, 16, 16, 12, 80), 5},
+                                                                {testing::packed_scene3(13, 2, 10, 10, 8, 30), 4}};
+  for (const auto& [scene, margin] : scenes) {
+    const testing::RunOutcome3 seq = testing::run_sequential3(scene, no_extra);
+    EXPECT_GT(seq.counters.refused_nodes, 0);
+    for (int n : {7, 27, 64}) {
+      SCOPED_TRACE("level " + std::to_string(scene.levels) + ", " + std::to_string(n) + " partitions");
+      const testing::RunOutcome3 par = testing::run_parallel3(kSerial, scene, n, {}, no_extra);
+      expect_invariant3(seq, par, scene);
+      int narrowed = 0;
+      for (const auto& p : par.distributed.partitions) {
+        EXPECT_LE(p.ghost, margin);
+        narrowed += p.ghost == margin ? 1 : 0;
+      }
+      EXPECT_GT(narrowed, 0);
+    }
+  }
 }
 
 // The tests can fail: with a ghost of one cube, SAMR cascades, the guard's and the face
