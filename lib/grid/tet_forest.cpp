@@ -96,7 +96,10 @@ std::array<LatticeKey3, 4> TetForest::vertex_keys(std::int32_t t) const {
 }
 
 std::int32_t TetForest::find(int level, const TetCode& target) const {
-  const LatticePoint3 c4 = centroid4(canonical(level, target));  // level coordinates × 4
+  return find_centroid(level, centroid4(canonical(level, target)));  // level coordinates × 4
+}
+
+std::int32_t TetForest::find_centroid(int level, const LatticePoint3& c4) const {
   for (int d = 0; d < 3; ++d)
     if (c4[d] < 0) return -1;
   const TetCode top = locate(c4, 2 + level);
@@ -109,9 +112,13 @@ std::int32_t TetForest::find_near(std::int32_t start, int level, const TetCode& 
   const LatticePoint3 c4 = centroid4(canonical(level, target));
   for (std::int32_t t = start; t >= 0; t = tets_[static_cast<std::size_t>(t)].parent) {
     const Tet& x = tets_[static_cast<std::size_t>(t)];
-    if (x.level <= level && locate(c4, 2 + level - x.level) == code(t)) return descend(t, level, c4);
+    if (x.level > level) continue;
+    // The cube first: most ancestors fail there, without locate's search of the cube's tets.
+    const int shift = 2 + level - x.level;
+    if ((c4[0] >> shift) != x.cube[0] || (c4[1] >> shift) != x.cube[1] || (c4[2] >> shift) != x.cube[2]) continue;
+    if (locate(c4, shift).local == x.local) return descend(t, level, c4);
   }
-  return find(level, canonical(level, target));
+  return find_centroid(level, c4);
 }
 
 std::int32_t TetForest::descend(std::int32_t t, int level, const LatticePoint3& c4) const {

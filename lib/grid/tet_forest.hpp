@@ -102,6 +102,8 @@ class TetForest {
   std::int32_t root_count_ = 0;
   std::vector<Tet> tets_;
 
+  // find() of the level-`level` tet whose centroid (×4, level coordinates, canonical) is c4.
+  std::int32_t find_centroid(int level, const LatticePoint3& c4) const;
   // The deepest tet with level ≤ `level` below t on the way to the level-`level` tet whose
   // centroid (×4, level coordinates) is c4; t must contain it.
   std::int32_t descend(std::int32_t t, int level, const LatticePoint3& c4) const;
