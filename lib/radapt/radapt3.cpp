@@ -59,6 +59,15 @@ struct EdgeEnds {
   PhaseMask mask_front = 0, mask_back = 0;
 };
 
+// What the guard reads of a vertex's menu entry in the leaf being guarded (take_menu): its
+// position in the leaf's frame, its closure mask, and `where` (0: the lattice position,
+// 1 + j: the node's j-th snap).
+struct MenuEntry {
+  Vec3 p{};
+  PhaseMask mask = 0;
+  std::uint32_t where = 0;
+};
+
 // An edge's ends in its frame (radapt3.hpp, EdgeFrame): lattice points, positions, length.
 struct EdgeGeometry {
   LatticePoint3 qa{}, qb{};
@@ -536,41 +545,51 @@ class Snapper {
         n = kept;
       }
       take_menu(t, menu, count);
-      // Bit j of gone_entries[i]: this leaf refused vertex i's j-th entry (each option is
-      // one node's, and a node is one vertex of the leaf: one bit per refusal).
-      std::array<std::uint8_t, 4> gone_entries{};
-      static_assert(kMaxMenu <= 8);
-      const auto gone = [&](int i, int j) { return (gone_entries[static_cast<std::size_t>(i)] >> j) & 1; };
-      std::array<int, 4> at{0, 0, 0, 0};
-      while (true) {
-        bool skip = false;
-        for (int i = 0; i < 4; ++i) {
-          const std::int32_t o = menu[static_cast<std::size_t>(i)][static_cast<std::size_t>(at[static_cast<std::size_t>(i)])];
-          chosen[static_cast<std::size_t>(i)] = o;
-          skip = skip || gone(i, at[static_cast<std::size_t>(i)]);
-        }
-        if (!skip) {
-          ++nodes_.combinations;
-          if (!acceptable(at)) {
+      nodes_.combinations += guard_leaf(menu, count, chosen);
+    }
+  }
+
+  // Pass 2 in one leaf whose menus take_menu has read: every combination, vertex 0's entry
+  // changing fastest, refusing (pick_refusal) until none is bad. Returns the combinations
+  // checked. Nested loops with the three outer vertices' share of acceptable() hoisted: most
+  // leaves refuse nothing, and the odometer's per-combination bookkeeping was a third of the
+  // guard's instructions.
+  std::int64_t guard_leaf(const Menu& menu, const std::array<int, 4>& count, std::array<std::int32_t, 4>& chosen) {
+    // Bit j of gone_entries[i]: this leaf refused vertex i's j-th entry (each option is
+    // one node's, and a node is one vertex of the leaf: one bit per refusal).
+    std::array<std::uint8_t, 4> gone_entries{};
+    static_assert(kMaxMenu <= 8);
+    const auto gone = [&](int i, int j) { return (gone_entries[static_cast<std::size_t>(i)] >> j) & 1; };
+    bool any_gone = false;
+    std::int64_t checked = 0;
+    const auto& entry = leaf_.entry;
+    std::array<int, 4> at{0, 0, 0, 0};
+    for (at[3] = 0; at[3] < count[3]; ++at[3])
+      for (at[2] = 0; at[2] < count[2]; ++at[2])
+        for (at[1] = 0; at[1] < count[1]; ++at[1]) {
+          const auto& e1 = entry[1][static_cast<std::size_t>(at[1])];
+          const auto& e2 = entry[2][static_cast<std::size_t>(at[2])];
+          const auto& e3 = entry[3][static_cast<std::size_t>(at[3])];
+          const PhaseMask rest_mask = e1.mask & e2.mask & e3.mask;
+          const std::size_t rest_slot = e1.where << 3 | e2.where << 6 | e3.where << 9;
+          for (at[0] = 0; at[0] < count[0]; ++at[0]) {
+            if (any_gone && (gone(0, at[0]) || gone(1, at[1]) || gone(2, at[2]) || gone(3, at[3]))) continue;
+            ++checked;
+            if (acceptable_with(entry[0][static_cast<std::size_t>(at[0])], rest_mask, rest_slot, at)) continue;
             // No refusable option: every vertex at its last option, which keeps the leaf
             // whole and undeformed; only a leaf no two phases can split ends here.
+            for (int i = 0; i < 4; ++i)
+              chosen[static_cast<std::size_t>(i)] = menu[static_cast<std::size_t>(i)][static_cast<std::size_t>(at[static_cast<std::size_t>(i)])];
             const std::int32_t pick = pick_refusal(menu, count, at, chosen, gone);
-            if (pick >= 0) {
-              for (int k = 0; k < 4; ++k)
-                if (chosen[static_cast<std::size_t>(k)] == pick)
-                  gone_entries[static_cast<std::size_t>(k)] |= static_cast<std::uint8_t>(1u << at[static_cast<std::size_t>(k)]);
-              refused_[static_cast<std::size_t>(pick)] = 1;
-            }
+            if (pick < 0) continue;
+            for (int k = 0; k < 4; ++k)
+              if (chosen[static_cast<std::size_t>(k)] == pick)
+                gone_entries[static_cast<std::size_t>(k)] |= static_cast<std::uint8_t>(1u << at[static_cast<std::size_t>(k)]);
+            refused_[static_cast<std::size_t>(pick)] = 1;
+            any_gone = true;
           }
         }
-        int i = 0;
-        for (; i < 4; ++i) {
-          if (++at[static_cast<std::size_t>(i)] < count[static_cast<std::size_t>(i)]) break;
-          at[static_cast<std::size_t>(i)] = 0;
-        }
-        if (i == 4) break;
-      }
-    }
+    return checked;
   }
 
   bool is_void(int phase) const { return (void_phases_ >> phase) & 1; }
@@ -604,18 +623,28 @@ class Snapper {
   // Would the leaf, with vertex i at entry at[i] of its menu (take_menu), emit only
   // positive tetrahedra within the bound, and could it be split?
   [[gnu::always_inline]] bool acceptable(const std::array<int, 4>& at) {
-    const auto& e0 = leaf_.entry[0][static_cast<std::size_t>(at[0])];
     const auto& e1 = leaf_.entry[1][static_cast<std::size_t>(at[1])];
     const auto& e2 = leaf_.entry[2][static_cast<std::size_t>(at[2])];
     const auto& e3 = leaf_.entry[3][static_cast<std::size_t>(at[3])];
-    const PhaseMask common = e0.mask & e1.mask & e2.mask & e3.mask;
+    return acceptable_with(leaf_.entry[0][static_cast<std::size_t>(at[0])], e1.mask & e2.mask & e3.mask,
+                           e1.where << 3 | e2.where << 6 | e3.where << 9, at);
+  }
+  // acceptable() given vertex 0's entry and the other three's masks ANDed and `where`s
+  // shifted into a slot (constant while vertex 0's entry changes).
+  [[gnu::always_inline]] bool acceptable_with(const MenuEntry& e0, PhaseMask rest_mask, std::size_t rest_slot,
+                                              const std::array<int, 4>& at) {
+    const PhaseMask common = e0.mask & rest_mask;
     if (common != 0) {  // kept whole (grid::stencil3::outcome): the four positions decide
       if (single_bit(common) && is_void(std::countr_zero(common))) return true;
       // Most combinations end here: a table indexed by the positions' `where`s, no hashing.
-      const std::size_t slot = e0.where | e1.where << 3 | e2.where << 6 | e3.where << 9;
+      const std::size_t slot = e0.where | rest_slot;
       if (whole_stamp_[slot] != memo_generation_) {
         whole_stamp_[slot] = memo_generation_;
-        whole_value_[slot] = good(e0.p, e1.p, e2.p, e3.p) ? 1 : 0;
+        const auto& e = leaf_.entry;
+        whole_value_[slot] = good(e0.p, e[1][static_cast<std::size_t>(at[1])].p, e[2][static_cast<std::size_t>(at[2])].p,
+                                  e[3][static_cast<std::size_t>(at[3])].p)
+                                 ? 1
+                                 : 0;
       }
       return whole_value_[slot] != 0;
     }
@@ -686,11 +715,6 @@ class Snapper {
     std::array<grid::stencil3::Split, 81> split;
     std::array<std::uint32_t, 81> stamp{};
     std::array<PhaseMask, 81> pair{};
-    struct MenuEntry {
-      Vec3 p{};
-      PhaseMask mask = 0;
-      std::uint32_t where = 0;
-    };
     std::array<std::array<MenuEntry, kMaxMenu>, 4> entry{};
   };
   LeafData leaf_;
