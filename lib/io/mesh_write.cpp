@@ -113,6 +113,20 @@ std::string phase_name(const std::vector<geometry::Phase>& phases, int id) {
   return "phase" + std::to_string(id);
 }
 
+// The distinct values of cell_phase, ascending, by a scan (a mesh has a handful of phases):
+// a sorted copy of every cell's phase cost 4 bytes per cell at the writers' peak and a sort
+// of the whole mesh (1.3 % of a 3D run's instructions).
+std::vector<int> distinct_phase_ids(const std::vector<std::int32_t>& cell_phase) {
+  std::vector<int> ids;
+  for (std::size_t c = 0; c < cell_phase.size(); ++c) {
+    const int id = cell_phase[c];
+    if ((c > 0 && id == cell_phase[c - 1]) || std::find(ids.begin(), ids.end(), id) != ids.end()) continue;
+    ids.push_back(id);
+  }
+  std::sort(ids.begin(), ids.end());
+  return ids;
+}
+
 // Cells grouped by phase (ascending id), original order kept inside a group.
 struct PhaseGroups {
   std::vector<int> ids;                 // distinct phase ids, ascending
@@ -122,9 +136,7 @@ struct PhaseGroups {
 
 PhaseGroups group_by_phase(const std::vector<std::int32_t>& cell_phase) {
   PhaseGroups groups;
-  groups.ids.assign(cell_phase.begin(), cell_phase.end());
-  std::sort(groups.ids.begin(), groups.ids.end());
-  groups.ids.erase(std::unique(groups.ids.begin(), groups.ids.end()), groups.ids.end());
+  groups.ids = distinct_phase_ids(cell_phase);
   std::vector<std::size_t> group_of(cell_phase.size());
   groups.begin.assign(groups.ids.size() + 1, 0);
   for (std::size_t c = 0; c < cell_phase.size(); ++c) {
@@ -143,7 +155,7 @@ PhaseGroups group_by_phase(const std::vector<std::int32_t>& cell_phase) {
 // Every phase named in `phases` and every id a cell uses, ascending, with its name.
 std::vector<geometry::Phase> phases_in_id_order(const std::vector<geometry::Phase>& phases,
                                                 const std::vector<std::int32_t>& cell_phase) {
-  std::vector<int> ids(cell_phase.begin(), cell_phase.end());
+  std::vector<int> ids = distinct_phase_ids(cell_phase);
   for (const auto& p : phases) ids.push_back(p.id);
   std::sort(ids.begin(), ids.end());
   ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
