@@ -156,6 +156,15 @@ struct SceneDesc {
 };
 
 // Field path of inclusion i for error messages: "inclusions[i]".
+// The scene's void phases as a mask over phase indices (the cells of a void phase are not
+// part of the mesh).
+inline PhaseMask void_phase_mask(const SceneDesc& scene) {
+  PhaseMask m = 0;
+  for (std::size_t k = 0; k < scene.phases.size() && k < 64; ++k)
+    if (scene.phases[k].is_void) m |= PhaseMask{1} << k;
+  return m;
+}
+
 inline std::string inclusion_field(std::size_t i) { return "inclusions[" + std::to_string(i) + "]"; }
 
 // The field path of listed inclusion k of a scene as the file names it: "inclusions[e]", or

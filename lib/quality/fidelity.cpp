@@ -260,9 +260,7 @@ void check_void_boundary_nodes(const mesh::SimplexMesh<Dim>& m, std::span<const 
   const geometry::SceneDesc& scene = oracle.scene();
   const int phases = static_cast<int>(scene.phases.size());
   Probe<Dim> probe(oracle);
-  PhaseMask void_mask = 0;
-  for (int k = 0; k < phases && k < 64; ++k)
-    if (scene.phases[std::size_t(k)].is_void) void_mask |= PhaseMask(1) << k;
+  const PhaseMask void_mask = geometry::void_phase_mask(scene);
   for (LocalId n : boundary_nodes) {
     const Vec<Dim> p = m.point(n);
     if (probe.closure(p) & void_mask) continue;

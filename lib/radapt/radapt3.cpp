@@ -594,13 +594,7 @@ class Snapper {
 
   bool is_void(int phase) const { return (void_phases_ >> phase) & 1; }
   // The scene's void phases as a mask (is_void runs for every tet the guard emits).
-  const PhaseMask void_phases_ = [this] {
-    PhaseMask m = 0;
-    const auto& phases = oracle_.scene().phases;
-    for (std::size_t k = 0; k < phases.size(); ++k)
-      if (phases[k].is_void) m |= PhaseMask{1} << k;
-    return m;
-  }();
+  const PhaseMask void_phases_ = geometry::void_phase_mask(oracle_.scene());
 
   // What acceptable() reads of the first count[i] entries of vertex i's menu (-1: the node
   // has none, it stays), in the leaf's frame: once per leaf, not once per combination.

@@ -74,6 +74,7 @@ class Subdivider {
 
  private:
   const geometry::Oracle2& oracle_;
+  const PhaseMask void_phases_ = geometry::void_phase_mask(oracle_.scene());
   const samr::RefinedGrid2& g_;
   const grid::QuadForest& forest_;
   const radapt::Nodes2& nodes_;
@@ -116,6 +117,9 @@ class Subdivider {
     return out;
   }
   void emit(const QuadPoints& q, int a, int b, int c, int phase) {
+    // Cells of a void phase are not part of the mesh (assembly dropped them): not emitted,
+    // they do not hold output memory at the mesher's peak.
+    if ((void_phases_ >> phase) & 1) return;
     out_.triangles.insert(out_.triangles.end(), {output_id(q.id[a], q.shift[a]), output_id(q.id[b], q.shift[b]),
                                                  output_id(q.id[c], q.shift[c])});
     out_.phase.push_back(static_cast<std::uint8_t>(phase));

@@ -44,6 +44,7 @@ class Subdivider3 {
 
  private:
   const geometry::Oracle3& oracle_;
+  const PhaseMask void_phases_ = geometry::void_phase_mask(oracle_.scene());
   const samr::RefinedGrid3& g_;
   const grid::TetForest& forest_;
   const radapt::Nodes3& nodes_;
@@ -120,6 +121,9 @@ class Subdivider3 {
   // `honeycomb`: a closure tet or an undeformed leaf, whose shape (and aspect ratio, `known`)
   // the tables give: no need to measure it.
   void emit(const std::array<std::int32_t, 4>& v, int phase, Origin origin, double known = -1) {
+    // Cells of a void phase are not part of the mesh (assembly dropped them, and the guard
+    // does not bound them): not emitted, not counted.
+    if ((void_phases_ >> phase) & 1) return;
     out_.tets.insert(out_.tets.end(), v.begin(), v.end());
     out_.phase.push_back(static_cast<std::uint8_t>(phase));
     if (known >= 0) {
