@@ -28,6 +28,22 @@ constexpr auto kEvenPermutations = [] {
   }
 }();
 
+// The even permutation (its index in kEvenPermutations) starting with vertex `lead` and,
+// for a tet, going on with vertex `second` (each pair of distinct vertices starts exactly
+// one; a triangle's lead alone picks its rotation, `second` is ignored).
+template <int Dim>
+constexpr auto kEvenByLeadAndSecond = [] {
+  std::array<std::array<int, Dim + 1>, Dim + 1> at{};
+  for (std::size_t i = 0; i < kEvenPermutations<Dim>.size(); ++i) {
+    const auto& perm = kEvenPermutations<Dim>[i];
+    if constexpr (Dim == 2)
+      at[static_cast<std::size_t>(perm[0])].fill(static_cast<int>(i));
+    else
+      at[static_cast<std::size_t>(perm[0])][static_cast<std::size_t>(perm[1])] = static_cast<int>(i);
+  }
+  return at;
+}();
+
 template <int Dim>
 CanonicalSimplex<Dim> canonical(const mesh::SimplexMesh<Dim>& m, std::size_t c) {
   constexpr int kCorners = Dim + 1;
@@ -40,22 +56,36 @@ CanonicalSimplex<Dim> canonical(const mesh::SimplexMesh<Dim>& m, std::size_t c) 
   best.phase = m.cell_phase[c];
   // With distinct vertices the smallest even permutation starts at the smallest vertex and
   // goes on with the smallest of the others (each is second in exactly one rotation that
-  // starts there): two scans instead of comparing every permutation (the checksum of a
-  // 190 M-tet mesh took seconds per rank). A cell with coincident vertices searches them all.
+  // starts there): two scans and a table instead of comparing every permutation (the
+  // checksum of a 190 M-tet mesh took seconds per rank). A cell with coincident vertices
+  // searches them all.
+  const auto less = [&](int a, int b) {  // v[a] < v[b], lexicographic
+    const auto &x = v[static_cast<std::size_t>(a)], &y = v[static_cast<std::size_t>(b)];
+    for (int d = 0; d < Dim; ++d)
+      if (x[static_cast<std::size_t>(d)] != y[static_cast<std::size_t>(d)]) return x[static_cast<std::size_t>(d)] < y[static_cast<std::size_t>(d)];
+    return false;
+  };
+  int lead = 0;
+  for (int k = 1; k < kCorners; ++k)
+    if (less(k, lead)) lead = k;
+  int second = -1;
   bool distinct = true;
-  for (int a = 0; a < kCorners; ++a)
-    for (int b = a + 1; b < kCorners; ++b) distinct = distinct && v[static_cast<std::size_t>(a)] != v[static_cast<std::size_t>(b)];
+  for (int k = 0; k < kCorners; ++k) {
+    if (k == lead) continue;
+    // The lead is the first smallest: a vertex equal to it is not below it, nor is a vertex
+    // equal to the running second (the others are distinct from both exactly when every
+    // pair differs).
+    distinct = distinct && less(lead, k);
+    if (second < 0 || less(k, second)) second = k;
+  }
+  for (int a = 0; a < kCorners && distinct; ++a)
+    for (int b = a + 1; b < kCorners && distinct; ++b)
+      if (a != lead && b != lead) distinct = less(a, b) || less(b, a);
   if (distinct) {
-    int lead = 0;
-    for (int k = 1; k < kCorners; ++k)
-      if (v[static_cast<std::size_t>(k)] < v[static_cast<std::size_t>(lead)]) lead = k;
-    const std::array<int, kCorners>* pick = nullptr;
-    for (const auto& perm : kEvenPermutations<Dim>)
-      if (perm[0] == lead && (pick == nullptr || v[static_cast<std::size_t>(perm[1])] < v[static_cast<std::size_t>((*pick)[1])]))
-        pick = &perm;
+    const auto& pick = kEvenPermutations<Dim>[kEvenByLeadAndSecond<Dim>[static_cast<std::size_t>(lead)][static_cast<std::size_t>(second)]];
     for (int k = 0; k < kCorners; ++k)
       for (int d = 0; d < Dim; ++d)
-        best.xyz[static_cast<std::size_t>(Dim * k + d)] = v[static_cast<std::size_t>((*pick)[static_cast<std::size_t>(k)])][static_cast<std::size_t>(d)];
+        best.xyz[static_cast<std::size_t>(Dim * k + d)] = v[static_cast<std::size_t>(pick[static_cast<std::size_t>(k)])][static_cast<std::size_t>(d)];
     return best;
   }
   bool first = true;

@@ -120,7 +120,7 @@ class Subdivider3 {
   enum class Origin { closure, kept, split, swapped };
   // `honeycomb`: a closure tet or an undeformed leaf, whose shape (and aspect ratio, `known`)
   // the tables give: no need to measure it.
-  void emit(const std::array<std::int32_t, 4>& v, int phase, Origin origin, double known = -1) {
+  [[gnu::always_inline]] void emit(const std::array<std::int32_t, 4>& v, int phase, Origin origin, double known = -1) {
     // Cells of a void phase are not part of the mesh (assembly dropped them, and the guard
     // does not bound them): not emitted, not counted.
     if ((void_phases_ >> phase) & 1) return;

@@ -99,6 +99,41 @@ TEST(Checksum, CanonicalFormIsTheSmallestEvenPermutation) {
   EXPECT_EQ(canonical_tets(m), expected);
 }
 
+// The same for triangles (the rotations): the lead vertex alone picks the rotation.
+TEST(Checksum, CanonicalTriangleIsTheSmallestRotation) {
+  const std::array<std::array<int, 3>, 3> even{{{0, 1, 2}, {1, 2, 0}, {2, 0, 1}}};
+  std::mt19937_64 rng(11);
+  mesh::Mesh2 m;
+  const int cells = 3000;
+  for (int c = 0; c < cells; ++c) {
+    for (int k = 0; k < 3; ++k) {
+      const std::size_t repeat = c % 7 == 0 && k == 2 ? 1 : 0;
+      for (int d = 0; d < 2; ++d)
+        m.coords.push_back(repeat ? m.coords[m.coords.size() - 2] : std::array{-1.0, -0.0, 0.0, 1.0}[rng() % 4]);
+      m.cell_nodes.push_back(static_cast<LocalId>(3 * c + k));
+    }
+    m.cell_phase.push_back(static_cast<std::int32_t>(c % 2));
+  }
+  std::vector<CanonicalTriangle> expected;
+  for (int c = 0; c < cells; ++c) {
+    CanonicalTriangle best;
+    for (std::size_t p = 0; p < even.size(); ++p) {
+      CanonicalTriangle t;
+      for (int k = 0; k < 3; ++k)
+        for (int d = 0; d < 2; ++d) {
+          double x = m.coords[2 * static_cast<std::size_t>(3 * c + even[p][static_cast<std::size_t>(k)]) + static_cast<std::size_t>(d)];
+          if (x == 0) x = 0;
+          std::memcpy(&t.xyz[static_cast<std::size_t>(2 * k + d)], &x, sizeof x);
+        }
+      if (p == 0 || t.xyz < best.xyz) best = t;
+    }
+    best.phase = m.cell_phase[static_cast<std::size_t>(c)];
+    expected.push_back(best);
+  }
+  std::sort(expected.begin(), expected.end());
+  EXPECT_EQ(canonical_triangles(m), expected);
+}
+
 TEST(Scenes3, AreValid) {
   for (const auto& c : testing::invariance_cases3()) EXPECT_NO_THROW(geometry::Oracle3{testing::with_triangles(c.scene)}) << c.name;
 }
