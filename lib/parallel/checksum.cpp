@@ -72,9 +72,7 @@ CanonicalSimplex<Dim> canonical(const mesh::SimplexMesh<Dim>& m, std::size_t c) 
   bool distinct = true;
   for (int k = 0; k < kCorners; ++k) {
     if (k == lead) continue;
-    // The lead is the first smallest: a vertex equal to it is not below it, nor is a vertex
-    // equal to the running second (the others are distinct from both exactly when every
-    // pair differs).
+    // Distinct iff every other vertex lies above the lead and the others differ pairwise.
     distinct = distinct && less(lead, k);
     if (second < 0 || less(k, second)) second = k;
   }

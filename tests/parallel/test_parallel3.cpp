@@ -60,35 +60,35 @@ TEST(EffectiveLevels3, SpreadCarriesTheFinerLevelToCloseNeighbours) {
 // The canonical form of a cell is the lexicographically smallest of its even permutations
 // (checksum.hpp); the checksum's shortcut for distinct vertices must find the same one as
 // trying them all, and cells with coincident vertices (degenerate, but a checksum must
-// still be order-free for them) take the full search.
-TEST(Checksum, CanonicalFormIsTheSmallestEvenPermutation) {
-  const std::array<std::array<int, 4>, 12> even{{{0, 1, 2, 3}, {0, 2, 3, 1}, {0, 3, 1, 2}, {1, 0, 3, 2},
-                                                 {1, 3, 2, 0}, {1, 2, 0, 3}, {2, 0, 1, 3}, {2, 1, 3, 0},
-                                                 {2, 3, 0, 1}, {3, 0, 2, 1}, {3, 2, 1, 0}, {3, 1, 0, 2}}};
-  std::mt19937_64 rng(7);
-  mesh::Mesh3 m;
-  const int cells = 4000;
+// still be order-free for them) take the full search. `even`: the even permutations, tried
+// by brute force; every `repeat_every`-th cell repeats a vertex.
+template <int Dim, std::size_t N>
+void expect_smallest_even_permutation(const std::array<std::array<int, Dim + 1>, N>& even, std::uint64_t seed,
+                                      int cells, int repeat_every) {
+  constexpr int kCorners = Dim + 1;
+  std::mt19937_64 rng(seed);
+  mesh::SimplexMesh<Dim> m;
   for (int c = 0; c < cells; ++c) {
     // Few distinct values per coordinate, so that vertices often share coordinates (ties
     // decided by later components) and some cells repeat a vertex.
-    for (int k = 0; k < 4; ++k) {
-      const std::size_t repeat = c % 5 == 0 && k == 3 ? 1 : 0;
-      for (int d = 0; d < 3; ++d)
-        m.coords.push_back(repeat ? m.coords[m.coords.size() - 3] : std::array{-1.0, -0.0, 0.0, 1.0}[rng() % 4]);
-      m.cell_nodes.push_back(static_cast<LocalId>(4 * c + k));
+    for (int k = 0; k < kCorners; ++k) {
+      const bool repeat = c % repeat_every == 0 && k == Dim;
+      for (int d = 0; d < Dim; ++d)
+        m.coords.push_back(repeat ? m.coords[m.coords.size() - Dim] : std::array{-1.0, -0.0, 0.0, 1.0}[rng() % 4]);
+      m.cell_nodes.push_back(static_cast<LocalId>(kCorners * c + k));
     }
     m.cell_phase.push_back(static_cast<std::int32_t>(c % 3));
   }
-  std::vector<CanonicalTet> expected;
+  std::vector<CanonicalSimplex<Dim>> expected;
   for (int c = 0; c < cells; ++c) {
-    CanonicalTet best;
+    CanonicalSimplex<Dim> best;
     for (std::size_t p = 0; p < even.size(); ++p) {
-      CanonicalTet t;
-      for (int k = 0; k < 4; ++k)
-        for (int d = 0; d < 3; ++d) {
-          double x = m.coords[3 * static_cast<std::size_t>(4 * c + even[p][static_cast<std::size_t>(k)]) + static_cast<std::size_t>(d)];
+      CanonicalSimplex<Dim> t;
+      for (int k = 0; k < kCorners; ++k)
+        for (int d = 0; d < Dim; ++d) {
+          double x = m.coords[Dim * static_cast<std::size_t>(kCorners * c + even[p][static_cast<std::size_t>(k)]) + static_cast<std::size_t>(d)];
           if (x == 0) x = 0;  // -0 and +0 are one point
-          std::memcpy(&t.xyz[static_cast<std::size_t>(3 * k + d)], &x, sizeof x);
+          std::memcpy(&t.xyz[static_cast<std::size_t>(Dim * k + d)], &x, sizeof x);
         }
       if (p == 0 || t.xyz < best.xyz) best = t;
     }
@@ -96,42 +96,20 @@ TEST(Checksum, CanonicalFormIsTheSmallestEvenPermutation) {
     expected.push_back(best);
   }
   std::sort(expected.begin(), expected.end());
-  EXPECT_EQ(canonical_tets(m), expected);
+  EXPECT_EQ(canonical_simplices(m), expected);
+}
+
+TEST(Checksum, CanonicalFormIsTheSmallestEvenPermutation) {
+  const std::array<std::array<int, 4>, 12> even{{{0, 1, 2, 3}, {0, 2, 3, 1}, {0, 3, 1, 2}, {1, 0, 3, 2},
+                                                 {1, 3, 2, 0}, {1, 2, 0, 3}, {2, 0, 1, 3}, {2, 1, 3, 0},
+                                                 {2, 3, 0, 1}, {3, 0, 2, 1}, {3, 2, 1, 0}, {3, 1, 0, 2}}};
+  expect_smallest_even_permutation<3>(even, 7, 4000, 5);
 }
 
 // The same for triangles (the rotations): the lead vertex alone picks the rotation.
 TEST(Checksum, CanonicalTriangleIsTheSmallestRotation) {
   const std::array<std::array<int, 3>, 3> even{{{0, 1, 2}, {1, 2, 0}, {2, 0, 1}}};
-  std::mt19937_64 rng(11);
-  mesh::Mesh2 m;
-  const int cells = 3000;
-  for (int c = 0; c < cells; ++c) {
-    for (int k = 0; k < 3; ++k) {
-      const std::size_t repeat = c % 7 == 0 && k == 2 ? 1 : 0;
-      for (int d = 0; d < 2; ++d)
-        m.coords.push_back(repeat ? m.coords[m.coords.size() - 2] : std::array{-1.0, -0.0, 0.0, 1.0}[rng() % 4]);
-      m.cell_nodes.push_back(static_cast<LocalId>(3 * c + k));
-    }
-    m.cell_phase.push_back(static_cast<std::int32_t>(c % 2));
-  }
-  std::vector<CanonicalTriangle> expected;
-  for (int c = 0; c < cells; ++c) {
-    CanonicalTriangle best;
-    for (std::size_t p = 0; p < even.size(); ++p) {
-      CanonicalTriangle t;
-      for (int k = 0; k < 3; ++k)
-        for (int d = 0; d < 2; ++d) {
-          double x = m.coords[2 * static_cast<std::size_t>(3 * c + even[p][static_cast<std::size_t>(k)]) + static_cast<std::size_t>(d)];
-          if (x == 0) x = 0;
-          std::memcpy(&t.xyz[static_cast<std::size_t>(2 * k + d)], &x, sizeof x);
-        }
-      if (p == 0 || t.xyz < best.xyz) best = t;
-    }
-    best.phase = m.cell_phase[static_cast<std::size_t>(c)];
-    expected.push_back(best);
-  }
-  std::sort(expected.begin(), expected.end());
-  EXPECT_EQ(canonical_triangles(m), expected);
+  expect_smallest_even_permutation<2>(even, 11, 3000, 7);
 }
 
 TEST(Scenes3, AreValid) {
