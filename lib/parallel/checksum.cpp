@@ -59,27 +59,17 @@ CanonicalSimplex<Dim> canonical(const mesh::SimplexMesh<Dim>& m, std::size_t c) 
   // starts there): two scans and a table instead of comparing every permutation (the
   // checksum of a 190 M-tet mesh took seconds per rank). A cell with coincident vertices
   // searches them all.
-  const auto less = [&](int a, int b) {  // v[a] < v[b], lexicographic
-    const auto &x = v[static_cast<std::size_t>(a)], &y = v[static_cast<std::size_t>(b)];
-    for (int d = 0; d < Dim; ++d)
-      if (x[static_cast<std::size_t>(d)] != y[static_cast<std::size_t>(d)]) return x[static_cast<std::size_t>(d)] < y[static_cast<std::size_t>(d)];
-    return false;
-  };
-  int lead = 0;
-  for (int k = 1; k < kCorners; ++k)
-    if (less(k, lead)) lead = k;
-  int second = -1;
+  const auto less = [&](int a, int b) { return v[static_cast<std::size_t>(a)] < v[static_cast<std::size_t>(b)]; };
   bool distinct = true;
-  for (int k = 0; k < kCorners; ++k) {
-    if (k == lead) continue;
-    // Distinct iff every other vertex lies above the lead and the others differ pairwise.
-    distinct = distinct && less(lead, k);
-    if (second < 0 || less(k, second)) second = k;
-  }
-  for (int a = 0; a < kCorners && distinct; ++a)
-    for (int b = a + 1; b < kCorners && distinct; ++b)
-      if (a != lead && b != lead) distinct = less(a, b) || less(b, a);
+  for (int a = 0; a < kCorners; ++a)
+    for (int b = a + 1; b < kCorners; ++b) distinct = distinct && v[static_cast<std::size_t>(a)] != v[static_cast<std::size_t>(b)];
   if (distinct) {
+    int lead = 0;
+    for (int k = 1; k < kCorners; ++k)
+      if (less(k, lead)) lead = k;
+    int second = -1;
+    for (int k = 0; k < kCorners; ++k)
+      if (k != lead && (second < 0 || less(k, second))) second = k;
     const auto& pick = kEvenPermutations<Dim>[kEvenByLeadAndSecond<Dim>[static_cast<std::size_t>(lead)][static_cast<std::size_t>(second)]];
     for (int k = 0; k < kCorners; ++k)
       for (int d = 0; d < Dim; ++d)

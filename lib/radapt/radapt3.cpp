@@ -545,7 +545,7 @@ class Snapper {
         n = kept;
       }
       take_menu(t, menu, count);
-      nodes_.combinations += guard_leaf(menu, count, chosen);
+      nodes_.combinations += guard_leaf(menu, count);
     }
   }
 
@@ -554,7 +554,7 @@ class Snapper {
   // checked. Nested loops with the three outer vertices' share of acceptable() hoisted: most
   // leaves refuse nothing, and the odometer's per-combination bookkeeping was a third of the
   // guard's instructions.
-  std::int64_t guard_leaf(const Menu& menu, const std::array<int, 4>& count, std::array<std::int32_t, 4>& chosen) {
+  std::int64_t guard_leaf(const Menu& menu, const std::array<int, 4>& count) {
     // Bit j of gone_entries[i]: this leaf refused vertex i's j-th entry (each option is
     // one node's, and a node is one vertex of the leaf: one bit per refusal).
     std::array<std::uint8_t, 4> gone_entries{};
@@ -578,6 +578,7 @@ class Snapper {
             if (acceptable_with(entry[0][static_cast<std::size_t>(at[0])], rest_mask, rest_slot, at)) continue;
             // No refusable option: every vertex at its last option, which keeps the leaf
             // whole and undeformed; only a leaf no two phases can split ends here.
+            std::array<std::int32_t, 4> chosen{};
             for (int i = 0; i < 4; ++i)
               chosen[static_cast<std::size_t>(i)] = menu[static_cast<std::size_t>(i)][static_cast<std::size_t>(at[static_cast<std::size_t>(i)])];
             const std::int32_t pick = pick_refusal(menu, count, at, chosen, gone);
