@@ -273,10 +273,15 @@ Box3 inclusion_box(const Shape& shape) { return shape_holding_box(shape); }
 double LoadField::box_load(const std::array<std::int64_t, 3>& lo, const std::array<std::int64_t, 3>& hi) const {
   const std::int64_t sx = n[0] + 1, sy = n[1] + 1;
   auto at = [&](std::int64_t i, std::int64_t j, std::int64_t k) { return prefix[i + sx * (j + sy * k)]; };
+  // The differences of prefix sums leave round-off where a box holds no load: -1e-19 made
+  // the bisection's "within tolerance of the best cut" test, best · (1 + tol), reject every
+  // cut of an empty region, which then lost its boxes (64 partitions of a sparse scene
+  // left a hole in the mesh). A load is never negative.
   if (dim == 2)
-    return at(hi[0], hi[1], 0) - at(lo[0], hi[1], 0) - at(hi[0], lo[1], 0) + at(lo[0], lo[1], 0);
-  return at(hi[0], hi[1], hi[2]) - at(lo[0], hi[1], hi[2]) - at(hi[0], lo[1], hi[2]) - at(hi[0], hi[1], lo[2]) +
-         at(lo[0], lo[1], hi[2]) + at(lo[0], hi[1], lo[2]) + at(hi[0], lo[1], lo[2]) - at(lo[0], lo[1], lo[2]);
+    return std::max(0.0, at(hi[0], hi[1], 0) - at(lo[0], hi[1], 0) - at(hi[0], lo[1], 0) + at(lo[0], lo[1], 0));
+  return std::max(0.0, at(hi[0], hi[1], hi[2]) - at(lo[0], hi[1], hi[2]) - at(hi[0], lo[1], hi[2]) -
+                           at(hi[0], hi[1], lo[2]) + at(lo[0], lo[1], hi[2]) + at(lo[0], hi[1], lo[2]) +
+                           at(hi[0], lo[1], lo[2]) - at(lo[0], lo[1], lo[2]));
 }
 
 double LoadField::total() const { return box_load({0, 0, 0}, n); }

@@ -13,6 +13,7 @@
 #include <queue>
 #include <tuple>
 
+#include "core/check.hpp"
 #include "core/error.hpp"
 #include "geometry/oracle.hpp"
 #include "partition/load_field.hpp"
@@ -276,6 +277,7 @@ void bisect(const LoadField& f, const RBox& box, int k, std::vector<RBox>& out) 
     out.push_back(box);
     return;
   }
+  CISAMR_CHECK(std::isfinite(best_face), "partition: no bisection cut chosen");
   bisect(f, best_a, k1, out);
   bisect(f, best_b, k2, out);
 }
@@ -300,6 +302,16 @@ LoadField checked_field(const geometry::SceneDesc& scene, int n, const Partition
 // Boxes → Partition: ids ordered by (z, y, x) of the min corner, neighbours, inclusions.
 Partition assemble(const LoadField& f, const geometry::SceneDesc& scene, std::vector<RBox> boxes, std::string method,
                    std::span<const InclusionLoad> given = {}) {
+  // The boxes must tile the raster: none empty, their cells adding up to all of it (they
+  // do not overlap by construction), or a partition's cells would be meshed by nobody.
+  std::int64_t cells = 0;
+  for (const RBox& b : boxes) {
+    std::int64_t c = 1;
+    for (int d = 0; d < f.dim; ++d) c *= b.hi[d] - b.lo[d];
+    CISAMR_CHECK(c > 0, "partition: an empty box");
+    cells += c;
+  }
+  CISAMR_CHECK(cells == f.n[0] * f.n[1] * f.n[2], "partition: the boxes do not tile the domain");
   std::sort(boxes.begin(), boxes.end(), [](const RBox& a, const RBox& b) {
     return std::tie(a.lo[2], a.lo[1], a.lo[0]) < std::tie(b.lo[2], b.lo[1], b.lo[0]);
   });
