@@ -93,20 +93,29 @@ void InclusionIndex<Dim>::query(const Box<Dim>& box, std::vector<std::int32_t>& 
 
 namespace {
 
+// Coarse cells of margin below ([axis][0]) and above ([axis][1]) the box on each axis.
+template <int Dim>
+using Margins = std::array<std::array<double, 2>, Dim>;
+template <int Dim>
+Margins<Dim> uniform_margins(double cells) {
+  Margins<Dim> m;
+  for (auto& axis : m) axis = {cells, cells};
+  return m;
+}
+
 // The box grown by `margin_cells` (the seed), the inclusions whose inflated box meets it,
 // then `rounds` rounds of the closure; the range covers the seed and, with `cover`, every
 // added inclusion's inflated box.
 template <int Dim>
 GhostRegion<Dim> grow(const InclusionIndex<Dim>& index, const grid::Lattice<Dim>& lattice,
-                      const grid::CellRange<Dim>& box, double margin_cells, int rounds, bool cover) {
+                      const grid::CellRange<Dim>& box, const Margins<Dim>& margin_cells, int rounds, bool cover) {
   const double h = lattice.h;
   GhostRegion<Dim> region;
   region.box = box;
-  const double m = margin_cells * h;
   Box<Dim> seed;
   for (int d = 0; d < Dim; ++d) {
-    seed.min[d] = lattice.origin[d] + static_cast<double>(box.lo[d]) * h - m;
-    seed.max[d] = lattice.origin[d] + static_cast<double>(box.hi[d]) * h + m;
+    seed.min[d] = lattice.origin[d] + static_cast<double>(box.lo[d]) * h - margin_cells[static_cast<std::size_t>(d)][0] * h;
+    seed.max[d] = lattice.origin[d] + static_cast<double>(box.hi[d]) * h + margin_cells[static_cast<std::size_t>(d)][1] * h;
   }
   // Breadth-first closure over "inflated boxes meet".
   std::vector<char> loaded(static_cast<std::size_t>(index.size()), 0);
@@ -151,14 +160,15 @@ GhostRegion<Dim> grow(const InclusionIndex<Dim>& index, const grid::Lattice<Dim>
     region.range.hi[d] = static_cast<std::int64_t>(std::clamp(hi, low, high));
     region.range.lo[d] = std::min(region.range.lo[d], box.lo[d]);
     region.range.hi[d] = std::max(region.range.hi[d], box.hi[d]);
-    region.ghost = static_cast<int>(std::max<std::int64_t>(
-        region.ghost, std::max(box.lo[d] - region.range.lo[d], region.range.hi[d] - box.hi[d])));
+    region.sides[static_cast<std::size_t>(d)] = {static_cast<int>(box.lo[d] - region.range.lo[d]),
+                                                 static_cast<int>(region.range.hi[d] - box.hi[d])};
+    region.ghost = std::max({region.ghost, region.sides[static_cast<std::size_t>(d)][0], region.sides[static_cast<std::size_t>(d)][1]});
   }
   if (lattice.any_periodic()) {
     // The kernel evaluates every cell of the window in its canonical frame (inside the
     // domain), so it needs the inclusions (listed or images) that meet the window's cells
     // where they are, not where the unwrapped window lies: query the canonical pieces.
-    const grid::CellRange<Dim> window = pipeline::ghosted_range(lattice, box, region.ghost);
+    const grid::CellRange<Dim> window = pipeline::ghosted_range(lattice, box, region.sides);
     std::vector<std::array<std::int64_t, 2>> pieces[Dim];  // per axis, canonical [lo, hi)
     for (int d = 0; d < Dim; ++d) {
       const std::int64_t n = lattice.coarse_cells[d];
@@ -202,23 +212,61 @@ int ghost_margin3(int level, int max_level) {
 template <int Dim>
 GhostRegion<Dim> ghost_region(const InclusionIndex<Dim>& index, const grid::Lattice<Dim>& lattice,
                               const grid::CellRange<Dim>& box, const GhostRule& rule) {
-  return grow<Dim>(index, lattice, box, rule.box_margin_cells, rule.max_closure_rounds, rule.max_closure_rounds != 0);
+  GhostRegion<Dim> region = grow<Dim>(index, lattice, box, uniform_margins<Dim>(rule.box_margin_cells), rule.max_closure_rounds,
+                                      rule.max_closure_rounds != 0);
+  // The kernel meshes the uniform width that covers the range (with closure rounds, the
+  // range may reach further on one side).
+  region.sides = pipeline::uniform_sides(region.ghost);
+  return region;
 }
 
 GhostRegion3 ghost_region3(const InclusionIndex3& index, const grid::Lattice<3>& lattice, const grid::CellRange<3>& box,
                            const GhostRule& rule, std::span<const int> levels) {
   // The coarsest effective level among the inclusions that could matter at all (the widest
-  // margin): the margin of that level, and the windows in cells of that level.
-  const GhostRegion3 widest = grow<3>(index, lattice, box, ghost_margin3(0), 0, false);
-  int coarsest = -1;
-  for (std::int32_t k : widest.inclusions) {
-    const int l = levels[static_cast<std::size_t>(k)];
-    coarsest = coarsest < 0 ? l : std::min(coarsest, l);
+  // margin): the windows are in cells of that level.
+  const int widest_margin = ghost_margin3(0);
+  const GhostRegion3 widest = grow<3>(index, lattice, box, uniform_margins<3>(widest_margin), 0, false);
+  const auto coarsest_of = [&](const std::vector<std::int32_t>& inclusions) {
+    int coarsest = -1;
+    for (std::int32_t k : inclusions) {
+      const int l = levels[static_cast<std::size_t>(k)];
+      coarsest = coarsest < 0 ? l : std::min(coarsest, l);
+    }
+    return coarsest;
+  };
+  const int coarsest = coarsest_of(widest.inclusions);
+  const auto margin_of = [&](int level) { return level < 0 ? 1 : ghost_margin3(level, lattice.max_level); };
+  const bool forced = rule.margin3_cubes > 0;
+  const bool closure = rule.max_closure_rounds != 0;
+  // Each face its own margin (issue #15: "derive it per box face from what actually lies
+  // within reach of that face"): the level that decides near a face is that of the cut
+  // leaves near it, on either side, so the margin beyond face (axis d, side s) is that of
+  // the coarsest level among the inclusions within the widest margin of the face (on both
+  // sides of it, and as far beyond the box's edges). Everything a decision in the box reads
+  // beyond that face lies there (README.md, "Ghost region (3D)"). A periodic lattice (its
+  // ghost wraps in frame coordinates) and the comparisons keep one margin for all faces.
+  Margins<3> margins = uniform_margins<3>(forced ? std::ceil(rule.margin3_cubes) : margin_of(coarsest));
+  const bool per_face = !forced && !closure && !lattice.any_periodic();
+  if (per_face) {
+    std::vector<std::int32_t> near_face;
+    for (int d = 0; d < 3; ++d)
+      for (int side = 0; side < 2; ++side) {
+        Box3 slab;
+        for (int a = 0; a < 3; ++a) {
+          slab.min[a] = lattice.origin[a] + static_cast<double>(box.lo[a] - widest_margin) * lattice.h;
+          slab.max[a] = lattice.origin[a] + static_cast<double>(box.hi[a] + widest_margin) * lattice.h;
+        }
+        const std::int64_t face = side == 0 ? box.lo[d] : box.hi[d];
+        slab.min[d] = lattice.origin[d] + static_cast<double>(face - widest_margin) * lattice.h;
+        slab.max[d] = lattice.origin[d] + static_cast<double>(face + widest_margin) * lattice.h;
+        near_face.clear();
+        index.query(slab, near_face);
+        margins[static_cast<std::size_t>(d)][static_cast<std::size_t>(side)] = margin_of(coarsest_of(near_face));
+      }
   }
-  int margin = static_cast<int>(std::ceil(rule.margin3_cubes));
-  if (margin <= 0) margin = coarsest < 0 ? 1 : ghost_margin3(coarsest, lattice.max_level);
-  GhostRegion3 region = grow<3>(index, lattice, box, margin, rule.max_closure_rounds, rule.max_closure_rounds != 0);
-  region.margin = margin;
+  GhostRegion3 region = grow<3>(index, lattice, box, margins, rule.max_closure_rounds, closure);
+  if (!per_face) region.sides = pipeline::uniform_sides(region.ghost);
+  for (const auto& axis : margins) region.margin = std::max({region.margin, static_cast<int>(axis[0]), static_cast<int>(axis[1])});
   // Without inclusions nearby nothing snaps or swaps: the windows stay whole. Closure
   // rounds (a comparison of the old rule) keep them whole too, and so does a periodic
   // lattice (its ghost wraps around the period in frame coordinates).

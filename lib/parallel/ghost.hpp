@@ -145,15 +145,18 @@ template <int Dim>
 struct GhostRegion {
   grid::CellRange<Dim> box;    // the partition's coarse cells
   grid::CellRange<Dim> range;  // coarse cells whose state decides the box (clipped to the domain)
-  int ghost = 0;               // uniform width that covers `range` (what pipeline::run2/run3 take)
-  int margin = 0;              // 3D: the margin it was chosen with (coarse cubes)
+  // Ghost cells beyond each face of the box that the kernel meshes (pipeline::Ghost): 3D,
+  // `range` side by side; 2D, the uniform `ghost` on every side.
+  pipeline::GhostSides sides{};
+  int ghost = 0;               // uniform width that covers `range` (the widest side)
+  int margin = 0;              // 3D: the widest side's margin (coarse cubes)
   // 3D: r-adaptivity's and face swapping's windows, fine lattice units (-1: every leaf).
   std::int64_t radapt_reach = -1, swap_reach = -1;
   std::vector<std::int32_t> inclusions;  // scene indices, ascending
 };
 template <int Dim>
 pipeline::Ghost kernel_ghost(const GhostRegion<Dim>& region) {
-  return {region.ghost, region.radapt_reach, region.swap_reach};
+  return {region.sides, region.radapt_reach, region.swap_reach};
 }
 using GhostRegion2 = GhostRegion<2>;
 using GhostRegion3 = GhostRegion<3>;

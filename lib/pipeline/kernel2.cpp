@@ -14,7 +14,7 @@ MeshParts<2> run_stages(const geometry::Oracle2& oracle, const grid::Lattice2& l
   Counters<2>& counters = result.counters;
   samr::RefinedGrid2 grid = [&] {
     ScopedPhase timer(&result.times, "samr");
-    return samr::refine2(oracle, lattice, ghosted_range(lattice, box, ghost.cubes), levels, options.progress);
+    return samr::refine2(oracle, lattice, ghosted_range(lattice, box, ghost.sides), levels, options.progress);
   }();
   // As in 3D (kernel3.cpp): freed working state back to the system after each stage.
   grid.release_lists();

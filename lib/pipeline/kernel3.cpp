@@ -15,7 +15,7 @@ namespace cisamr::pipeline {
 MeshParts<3> run_stages(const geometry::Oracle3& oracle, const grid::Lattice3& lattice, const grid::CellRange<3>& box,
                         const Ghost& ghost, const Options& options, std::span<const int> levels, Result<3>& result) {
   Counters<3>& counters = result.counters;
-  const grid::CellRange<3> range = ghosted_range(lattice, box, ghost.cubes);
+  const grid::CellRange<3> range = ghosted_range(lattice, box, ghost.sides);
   const auto window = [&](std::int64_t reach) { return grid::LeafWindow::around(lattice, box, reach); };
   samr::RefinedGrid3 grid = [&] {
     ScopedPhase timer(&result.times, "samr");

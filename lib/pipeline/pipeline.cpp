@@ -80,17 +80,18 @@ MeshEstimate estimate_mesh(const geometry::SceneDesc& scene) {
 }
 
 template <int Dim>
-grid::CellRange<Dim> ghosted_range(const grid::Lattice<Dim>& lattice, const grid::CellRange<Dim>& box, int ghost) {
+grid::CellRange<Dim> ghosted_range(const grid::Lattice<Dim>& lattice, const grid::CellRange<Dim>& box, const GhostSides& ghost) {
   grid::CellRange<Dim> range = box;
   for (int d = 0; d < Dim; ++d) {
+    const int below = ghost[static_cast<std::size_t>(d)][0], above = ghost[static_cast<std::size_t>(d)][1];
     if (lattice.periodic[d]) {  // the ghost wraps around the period (the forest takes it so)
-      range.lo[d] = box.lo[d] - ghost;
-      range.hi[d] = box.hi[d] + ghost;
+      range.lo[d] = box.lo[d] - below;
+      range.hi[d] = box.hi[d] + above;
       if (range.hi[d] - range.lo[d] >= lattice.coarse_cells[d]) range.lo[d] = 0, range.hi[d] = lattice.coarse_cells[d];
       continue;
     }
-    range.lo[d] = std::max<std::int64_t>(0, box.lo[d] - ghost);
-    range.hi[d] = std::min<std::int64_t>(lattice.coarse_cells[d], box.hi[d] + ghost);
+    range.lo[d] = std::max<std::int64_t>(0, box.lo[d] - below);
+    range.hi[d] = std::min<std::int64_t>(lattice.coarse_cells[d], box.hi[d] + above);
   }
   return range;
 }
@@ -192,8 +193,8 @@ template grid::Lattice<2> make_lattice<2>(const geometry::SceneDesc&, const Opti
 template grid::Lattice<3> make_lattice<3>(const geometry::SceneDesc&, const Options&);
 template MeshEstimate estimate_mesh<2>(const geometry::SceneDesc&);
 template MeshEstimate estimate_mesh<3>(const geometry::SceneDesc&);
-template grid::CellRange<2> ghosted_range<2>(const grid::Lattice<2>&, const grid::CellRange<2>&, int);
-template grid::CellRange<3> ghosted_range<3>(const grid::Lattice<3>&, const grid::CellRange<3>&, int);
+template grid::CellRange<2> ghosted_range<2>(const grid::Lattice<2>&, const grid::CellRange<2>&, const GhostSides&);
+template grid::CellRange<3> ghosted_range<3>(const grid::Lattice<3>&, const grid::CellRange<3>&, const GhostSides&);
 template void assemble<2>(const geometry::SceneDesc&, MeshParts<2>&&, int, Result<2>&);
 template void assemble<3>(const geometry::SceneDesc&, MeshParts<3>&&, int, Result<3>&);
 template Result<2> run<2>(const geometry::Oracle2&, const grid::Lattice<2>&, const grid::CellRange<2>&, const Ghost&,

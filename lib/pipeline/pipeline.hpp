@@ -74,12 +74,15 @@ double coarse_cells(const geometry::SceneDesc& scene);
 template <int Dim>
 grid::Lattice<Dim> make_lattice(const geometry::SceneDesc& scene, const Options& options);
 
-// The coarse cells a kernel builds its forest on: `box` grown by `ghost` cells on each
-// side, clipped to the domain; on a periodic axis not clipped but wrapping (the whole
+// Coarse cells of ghost below ([axis][0]) and above ([axis][1]) a box on each axis.
+using GhostSides = std::array<std::array<int, 2>, 3>;
+inline GhostSides uniform_sides(int cells) { return {{{cells, cells}, {cells, cells}, {cells, cells}}}; }
+
+// The coarse cells a kernel builds its forest on: `box` grown by `ghost` cells beyond each
+// face, clipped to the domain; on a periodic axis not clipped but wrapping (the whole
 // period once it spans it).
 template <int Dim>
-grid::CellRange<Dim> ghosted_range(const grid::Lattice<Dim>& lattice, const grid::CellRange<Dim>& box, int ghost);
-
+grid::CellRange<Dim> ghosted_range(const grid::Lattice<Dim>& lattice, const grid::CellRange<Dim>& box, const GhostSides& ghost);
 
 // A rough count of the elements a scene's mesh will have, before any memory is taken: the
 // background cells, and per inclusion a band along its interface at its requested level
@@ -96,12 +99,13 @@ template <int Dim>
 MeshEstimate estimate_mesh(const geometry::SceneDesc& scene);
 
 // What a partition's kernel takes around its box (lib/parallel/README.md, "Ghost region").
-// SAMR builds its forest on `cubes` coarse cells on each side; in 3D r-adaptivity and face
-// swapping then work only on the leaves within their reach of the box (fine lattice units,
-// grid::LeafWindow; -1: every leaf), which is all their decisions in the box read. Windows
-// need the box and the forest in one frame: not on a periodic lattice (-1 there).
+// SAMR builds its forest on `sides` coarse cells beyond each face of the box (3D: each
+// face's own, from what lies near it); in 3D r-adaptivity and face swapping then work only
+// on the leaves within their reach of the box (fine lattice units, grid::LeafWindow; -1:
+// every leaf), which is all their decisions in the box read. Windows need the box and the
+// forest in one frame: not on a periodic lattice (-1 there).
 struct Ghost {
-  int cubes = 0;
+  GhostSides sides{};
   std::int64_t radapt_reach = -1;
   std::int64_t swap_reach = -1;
 };

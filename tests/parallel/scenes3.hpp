@@ -152,6 +152,29 @@ inline geometry::SceneDesc periodic_packed_scene3(std::uint64_t seed, int levels
   return s;
 }
 
+// Level-0 spheres in the -x part (16 cubes), level-2 ones in the +x part (12 cubes), two
+// cubes of matrix between them: a partition's box sees different levels beyond different
+// faces, so its ghost differs by face (lib/parallel/README.md, "Ghost region (3D)").
+inline geometry::SceneDesc mixed_level_scene3() {
+  const geometry::SceneDesc coarse = packed_scene3(31, 0, 16, 12, 10, 60);
+  const geometry::SceneDesc fine = packed_scene3(32, 2, 12, 12, 10, 40);
+  geometry::SceneDesc s = coarse;
+  s.source = "mixed-level-scene-3d";
+  const double shift = 18 * s.h;
+  s.domain_max[0] = shift + fine.domain_max[0];
+  s.inclusions.clear();
+  for (const geometry::Inclusion& inc : coarse.inclusions) {
+    const auto& sphere = std::get<geometry::Sphere>(inc.shape);
+    if (sphere.center[0] + sphere.radius < coarse.domain_max[0]) s.inclusions.push_back(inc);
+  }
+  for (geometry::Inclusion inc : fine.inclusions) {
+    auto& sphere = std::get<geometry::Sphere>(inc.shape);
+    sphere.center[0] += shift;
+    if (sphere.center[0] - sphere.radius > shift) s.inclusions.push_back(inc);
+  }
+  return s;
+}
+
 // Contacts, unions, STL surfaces and the domain boundary at levels 0-2 (run with
 // extra_levels = 1: Lmax = 3) on 12 × 12 × 8 cubes of h = 0.125: spheres of two phases
 // touching at one point, a sphere a hundredth of a cell from another of its phase, two

@@ -163,13 +163,24 @@ TEST(GhostMargin3, FollowsTheCoarsestLevelNearTheBox) {
   EXPECT_EQ(r.margin, 4);
   EXPECT_EQ(r.range.lo[0], 4);
   EXPECT_EQ(r.range.hi[0], 28);
-  // The level-0 sphere within 8 cubes of the box: its margin, and it is loaded.
+  // The level-0 sphere within 8 cubes of the box's +x face (and near the ±y and ±z faces'
+  // slabs): their margin, and it is loaded. The -x face has only the level-2 sphere within
+  // 8 cubes: its own margin, 5.
   s.inclusions[1].shape = geometry::Sphere{{3.7, 2.0, 2.0}, 0.2};
   const InclusionIndex3 near(s, lattice, GhostRule{});
   r = ghost_region3(near, lattice, box, GhostRule{}, levels);
   EXPECT_EQ(r.margin, 8);
   EXPECT_EQ(r.inclusions, (std::vector<std::int32_t>{0, 1}));
-  EXPECT_EQ(r.range.lo[0], 0);  // clipped to the domain
+  EXPECT_EQ(r.range.lo[0], 3);
+  EXPECT_EQ(r.range.hi[0], 32);
+  EXPECT_EQ(r.sides, (pipeline::GhostSides{{{5, 8}, {8, 8}, {8, 8}}}));
+  // Near the -x face instead: that face's margin (down to the domain's face).
+  s.inclusions[1].shape = geometry::Sphere{{0.3, 2.0, 2.0}, 0.2};
+  const InclusionIndex3 near_low(s, lattice, GhostRule{});
+  r = ghost_region3(near_low, lattice, box, GhostRule{}, levels);
+  EXPECT_EQ(r.range.lo[0], 0);
+  EXPECT_EQ(r.range.hi[0], 29);
+  EXPECT_EQ(r.sides, (pipeline::GhostSides{{{8, 5}, {8, 8}, {8, 8}}}));
   // No inclusion near: one cube.
   const grid::CellRange<3> far{{40, 0, 0}, {44, 4, 4}};
   r = ghost_region3(near, lattice, far, GhostRule{}, levels);
@@ -288,6 +299,97 @@ TEST(Invariance3, WithoutExtraLevelsTheGhostIsNarrower) {
       EXPECT_GT(narrowed, 0);
     }
   }
+}
+
+// Each face its own margin: on a scene of level-0 spheres beside level-2 ones, boxes whose
+// faces see different levels take a narrower ghost beyond the finer faces, with and
+// without extra levels, and the mesh is still the whole-domain one.
+TEST(Invariance3, EachFaceTakesTheMarginOfWhatLiesNearIt) {
+  const geometry::SceneDesc scene = testing::mixed_level_scene3();
+  pipeline::Options no_extra;
+  no_extra.extra_levels = 0;
+  for (const pipeline::Options& options : {pipeline::Options{}, no_extra}) {
+    const testing::RunOutcome3 seq = testing::run_sequential3(scene, options);
+    ASSERT_FALSE(seq.failed) << seq.error;
+    for (int n : {7, 27, 64}) {
+      SCOPED_TRACE(std::to_string(options.extra_levels) + " extra levels, " + std::to_string(n) + " partitions");
+      const testing::RunOutcome3 par = testing::run_parallel3(kSerial, scene, n, {}, options);
+      expect_invariant3(seq, par, scene);
+      // Partitions that meshed fewer ghost cells than their widest side all round would.
+      const std::array<std::int64_t, 3> cubes{30, 12, 10};
+      int narrowed = 0;
+      for (const auto& p : par.distributed.partitions) {
+        std::int64_t grown = 1, inside = 1;
+        for (std::size_t a = 0; a < 3; ++a) {
+          grown *= std::min(cubes[a], p.lattice_max[a] + p.ghost) - std::max<std::int64_t>(0, p.lattice_min[a] - p.ghost);
+          inside *= p.lattice_max[a] - p.lattice_min[a];
+        }
+        narrowed += p.ghost_cells < grown - inside ? 1 : 0;
+      }
+      if (n >= 27) EXPECT_GT(narrowed, 0);  // 7 boxes: the -x faces see level 0, the +x faces are the domain's
+    }
+  }
+  // The sides themselves: a box in the level-2 part whose -x face has the level-0 spheres
+  // within 8 cubes and whose +x face does not.
+  const grid::Lattice3 lattice = scene_lattice<3>(scene, no_extra);
+  const InclusionIndex3 index(scene, lattice, GhostRule{});
+  std::vector<int> levels;
+  for (const auto& inc : scene.inclusions) levels.push_back(inc.levels);
+  const grid::CellRange<3> box{{20, 0, 0}, {26, 12, 10}};
+  const GhostRegion3 r = ghost_region3(index, lattice, box, GhostRule{}, levels);
+  EXPECT_EQ(r.sides[0][0], ghost_margin3(0, 2));  // the level-0 spheres within 8 cubes
+  EXPECT_EQ(r.sides[0][1], ghost_margin3(2, 2));
+  EXPECT_LT(r.sides[0][1], r.sides[0][0]);
+}
+
+// The sweep behind the per-face margins (lib/parallel/README.md, "Ghost region (3D)"): 53
+// scenes at 7, 8, 27 and 64 partitions against the whole-domain mesh, about 2 minutes, so
+// not in the suite: `test_parallel3 --gtest_also_run_disabled_tests
+// --gtest_filter='*SweepOfSparseAndMixedScenes'`.
+TEST(Invariance3, DISABLED_SweepOfSparseAndMixedScenes) {
+  int runs = 0, narrowed_runs = 0;
+  const auto check = [&](const geometry::SceneDesc& scene, const pipeline::Options& options, const std::string& name) {
+    const testing::RunOutcome3 seq = testing::run_sequential3(scene, options);
+    ASSERT_FALSE(seq.failed) << name << ": " << seq.error;
+    for (int n : {7, 8, 27, 64}) {
+      const testing::RunOutcome3 par = testing::run_parallel3(kSerial, scene, n, {}, options);
+      ++runs;
+      EXPECT_EQ(par.checksum, seq.checksum) << name << ", " << n << " partitions";
+      EXPECT_EQ(par.mesh.cell_count(), seq.mesh.cell_count()) << name << ", " << n << " partitions";
+      int narrowed = 0;
+      for (const auto& p : par.distributed.partitions) {
+        std::int64_t grown = 1, inside = 1;
+        for (std::size_t a = 0; a < 3; ++a) {
+          const auto cubes = std::llround((scene.domain_max[a] - scene.domain_min[a]) / scene.h);
+          grown *= std::min<std::int64_t>(cubes, p.lattice_max[a] + p.ghost) - std::max<std::int64_t>(0, p.lattice_min[a] - p.ghost);
+          inside *= p.lattice_max[a] - p.lattice_min[a];
+        }
+        narrowed += p.ghost_cells < grown - inside ? 1 : 0;
+      }
+      narrowed_runs += narrowed > 0 ? 1 : 0;
+    }
+  };
+  pipeline::Options no_extra;
+  no_extra.extra_levels = 0;
+  for (std::uint64_t seed = 600; seed < 612; ++seed) {
+    check(testing::packed_scene3(seed, 0, 40, 24, 16, 5), {}, "very sparse, level 0, seed " + std::to_string(seed));
+    check(testing::packed_scene3(seed, 1, 32, 16, 12, 4), {}, "very sparse, level 1, seed " + std::to_string(seed));
+  }
+  check(testing::contact_scene3(), testing::contact_options3(), "contact");
+  for (std::uint64_t seed = 400; seed < 406; ++seed) {
+    check(testing::packed_scene3(seed, 0, 32, 24, 16, 12), {}, "sparse, level 0, seed " + std::to_string(seed));
+    check(testing::packed_scene3(seed, 1, 24, 16, 12, 10), no_extra, "sparse, level 1, seed " + std::to_string(seed));
+    check(testing::packed_scene3(seed, 2, 16, 12, 10, 8), {}, "sparse, level 2, seed " + std::to_string(seed));
+  }
+  for (std::uint64_t seed = 500; seed < 504; ++seed) {
+    geometry::SceneDesc s = testing::packed_scene3(seed, 1, 24, 16, 12, 60);
+    for (auto& inc : s.inclusions)
+      if (std::get<geometry::Sphere>(inc.shape).center[0] < 1.2) inc.levels = 0;
+    check(s, {}, "levels 0 and 1, seed " + std::to_string(seed));
+    check(s, no_extra, "levels 0 and 1 without extra levels, seed " + std::to_string(seed));
+  }
+  check(testing::mixed_level_scene3(), {}, "levels 0 and 2");
+  std::printf("%d runs, %d with partitions whose ghost is narrower on some face\n", runs, narrowed_runs);
 }
 
 // The tests can fail: with a ghost of one cube, SAMR cascades, the guard's and the face
