@@ -82,21 +82,6 @@ std::int32_t TetForest::root(std::int64_t ci, std::int64_t cj, std::int64_t ck, 
   return static_cast<std::int32_t>(5 * cube + local);
 }
 
-std::array<LatticePoint3, 4> TetForest::fine_vertices(std::int32_t t) const {
-  // Each coordinate shifted before it is stored: shifting tet_vertices' result in place
-  // made the compiler reload its scalar stores as vectors, a failed store-to-load forward
-  // per pair of coordinates (two thirds of this function's time, itself 6 % of a run).
-  const Tet& x = tet(t);
-  const int shift = lattice_.max_level - x.level;
-  const auto& corners = kCubeTets[static_cast<std::size_t>((x.cube[0] + x.cube[1] + x.cube[2]) & 1)][x.local];
-  std::array<LatticePoint3, 4> v;
-  for (int i = 0; i < 4; ++i)
-    for (int d = 0; d < 3; ++d)
-      v[static_cast<std::size_t>(i)][static_cast<std::size_t>(d)] =
-          (std::int64_t{x.cube[static_cast<std::size_t>(d)]} + ((corners[static_cast<std::size_t>(i)] >> d) & 1)) << shift;
-  return v;
-}
-
 std::array<LatticeKey3, 4> TetForest::vertex_keys(std::int32_t t) const {
   const auto v = fine_vertices(t);
   return {key3(v[0]), key3(v[1]), key3(v[2]), key3(v[3])};
