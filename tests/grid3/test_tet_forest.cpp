@@ -234,7 +234,9 @@ TEST(TetForest, LeavesAtMidpointMatchBruteForce) {
     // A level below the target's: the leaf or tet on its path, as find() says.
     const int level = std::max(0, f.tet(target).level - 1);
     const TetCode parent_code = f.code(f.tet(target).parent >= 0 ? f.tet(target).parent : target);
-    if (f.tet(target).parent >= 0) EXPECT_EQ(f.find_near(start, level, parent_code), f.find(level, parent_code));
+    if (f.tet(target).parent >= 0) {
+      EXPECT_EQ(f.find_near(start, level, parent_code), f.find(level, parent_code));
+    }
   }
 }
 

@@ -255,7 +255,9 @@ TEST_P(Invariance3, CohesiveScenes) {
     for (char s : seen) EXPECT_EQ(s, 1);
     cells += static_cast<std::int64_t>(par.mesh.cohesive.count());
     // Tangent spheres of phases 2 and 3 in the matrix: triple lines, each node in 3 copies.
-    if (c.name == "contact") EXPECT_GT(cisamr::testing::multi_phase_points(par.mesh), 0);
+    if (c.name == "contact") {
+      EXPECT_GT(cisamr::testing::multi_phase_points(par.mesh), 0);
+    }
   }
   EXPECT_GT(cells, 10000);
 }
