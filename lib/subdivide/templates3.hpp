@@ -423,7 +423,29 @@ struct ClosureTables {
   std::array<Closure, 2 * 64 * 16> star{};  // centroid stars (valid for any tet star-shaped from its centroid)
 };
 
-// Built once, on first use (deterministic: the same on every rank); a few milliseconds.
+// The optimal closure of a tet of `kind` with midpoints on `edge_mask` and quad `variant`,
+// searched the first time any caller asks for it and kept (the whole table, 478 searches,
+// took 46 ms in every 3D process; a mesh uses a fraction of it). Deterministic, the same on
+// every rank; thread-safe: an entry is published once, under a lock, and read after an
+// acquire load.
+inline const Closure& best_closure_on_first_use(Kind kind, unsigned edge_mask, unsigned variant) {
+  static constexpr std::size_t kEntries = 2 * 64 * 16;
+  static std::array<Closure, kEntries> cache{};
+  static std::array<std::atomic<bool>, kEntries> ready{};
+  static std::mutex searching;
+  variant &= quad_faces(edge_mask);
+  const std::size_t i = closure_index(kind, edge_mask, variant);
+  if (!ready[i].load(std::memory_order_acquire)) {
+    const std::lock_guard<std::mutex> lock(searching);
+    if (!ready[i].load(std::memory_order_relaxed)) {
+      cache[i] = detail::best_closure(kind, edge_mask, variant);
+      ready[i].store(true, std::memory_order_release);
+    }
+  }
+  return cache[i];
+}
+
+// Every entry at once (the tests); `best` from the same searches as closure() uses.
 inline const ClosureTables& closure_tables() {
   static const ClosureTables tables = [] {
     ClosureTables t;
@@ -434,7 +456,7 @@ inline const ClosureTables& closure_tables() {
           if ((variant & ~quads) != 0) continue;
           const Kind kind = static_cast<Kind>(k);
           const std::size_t i = closure_index(kind, mask, variant);
-          t.best[i] = detail::best_closure(kind, mask, variant);
+          t.best[i] = best_closure_on_first_use(kind, mask, variant);
           t.star[i] = detail::centroid_star(kind, mask, variant);
         }
       }
@@ -446,25 +468,9 @@ inline const ClosureTables& closure_tables() {
 
 // The closure of a tet of `kind` whose edges in `edge_mask` carry midpoints; `keys` are
 // the lattice keys of points 0-9 (vertices, then edge midpoints) for the key rule.
-// Each entry is searched on first use (the whole table, 478 searches, took 46 ms in every
-// 3D process; a mesh uses a fraction of it), the same entry as closure_tables().best's.
-// Thread-safe: an entry is published once, under a lock, and read after an acquire load.
 template <class Key>
 inline const Closure& closure(Kind kind, unsigned edge_mask, const std::array<Key, 10>& keys) {
-  static constexpr std::size_t kEntries = 2 * 64 * 16;
-  static std::array<Closure, kEntries> cache{};
-  static std::array<std::atomic<bool>, kEntries> ready{};
-  static std::mutex searching;
-  const unsigned variant = quad_variant(edge_mask, keys) & quad_faces(edge_mask);
-  const std::size_t i = closure_index(kind, edge_mask, variant);
-  if (!ready[i].load(std::memory_order_acquire)) {
-    const std::lock_guard<std::mutex> lock(searching);
-    if (!ready[i].load(std::memory_order_relaxed)) {
-      cache[i] = detail::best_closure(kind, edge_mask, variant);
-      ready[i].store(true, std::memory_order_release);
-    }
-  }
-  return cache[i];
+  return best_closure_on_first_use(kind, edge_mask, quad_variant(edge_mask, keys));
 }
 
 }  // namespace cisamr::subdivide::templates3
