@@ -29,6 +29,7 @@ struct MeshArgs {
   bool gather = false;
   bool stream = false;  // write .pvtu pieces while meshing (parallel/stream.hpp)
   bool fixed_ghost = false;  // the fixed 3-cell inclusion margin instead of the level-aware one
+  double ghost_cells = 0;    // --ghost-cubes: the box margin forced (comparisons), 0: derived
   std::optional<double> explode;  // --explode F: the regions of the written .vtu moved apart
   driver::Options options;
 };
@@ -69,6 +70,7 @@ void run_mesh(MeshArgs& args, const GlobalFlags& flags, int& exit_code) {
   const Comm& comm = parallel::world();
   driver::Options& options = args.options;
   options.ghost.level_aware = !args.fixed_ghost;
+  if (args.ghost_cells > 0) options.ghost.margin3_cubes = options.ghost.box_margin_cells = args.ghost_cells;
   options.figures = !args.report.empty();
   options.svg_slice = {.axis = args.svg_axis[0] - 'x', .at = args.svg_at};
   // Progress: drawn on rank 0, for the slowest rank (flags are alike on every rank, so every
@@ -210,9 +212,9 @@ void add_mesh_command(CLI::App& app, GlobalFlags& flags, int& exit_code) {
                   "is exact because inclusion levels are settled beforehand; -1: the full closure)")
       ->check(named("--ghost-closure-rounds", number_in(-1, 1e6, true)))
       ->group("");
-  cmd->add_option("--ghost-cubes", ghost.margin3_cubes,
-                  "Comparison (3D): a ghost of this many coarse cubes instead of the one derived from the "
-                  "kernel's reach (lib/parallel/README.md); too few break partition invariance")
+  cmd->add_option("--ghost-cubes", args->ghost_cells,
+                  "Comparison: a ghost of this many coarse cells (2D) or cubes (3D) instead of the one derived from "
+                  "the kernel's reach (lib/parallel/README.md); too few break partition invariance")
       ->check(named("--ghost-cubes", number_in(0, 1e6)))
       ->group("");
   cmd->add_option("--ghost-windows", ghost.radapt_window_cells3,

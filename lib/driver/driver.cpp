@@ -52,7 +52,7 @@ double elements_in_memory(const Options& options) {
 // The share of the whole mesh in memory at once when `ranks` ranks (all assumed on this
 // machine) stream `partitions` partitions, each rank one at a time: a partition is about
 // 1/partitions of the elements (the partitioner balances them), grown by the widest ghost
-// on every side (3D: ghost_margin3(0) coarse cubes, 2D: kDefaultGhostCells). 1 when not
+// on every side (3D: ghost_margin3(0) coarse cubes, 2D: kGhostMargin2). 1 when not
 // streamed. (A constant "6 partitions' worth" before: E4's 8 partitions on 2 ranks, 4.6 GiB,
 // were refused as 45 GB.)
 template <int Dim>
@@ -60,7 +60,7 @@ double streamed_share(const geometry::SceneDesc& scene, int partitions, int rank
   if (partitions <= 0) return 1.0;
   const double cells = pipeline::coarse_cells<Dim>(scene);
   const double side = std::pow(cells / partitions, 1.0 / Dim);
-  const double ghost = Dim == 3 ? parallel::ghost_margin3(0) : parallel::kDefaultGhostCells;
+  const double ghost = Dim == 3 ? parallel::ghost_margin3(0) : parallel::kGhostMargin2;
   const double grown = std::min(cells, std::pow(side + 2 * ghost, Dim));
   return std::min(1.0, ranks * grown / cells);
 }

@@ -26,15 +26,18 @@ namespace cisamr::parallel {
 // The ghost widths derive from the reach each stage declares in its header: how far beyond
 // a cell the decisions about it look (README.md, "Ghost region").
 
-// 2D: the widest reach of the 2D stages, in cells of the deciding level (R4's buffer, 2).
-inline constexpr int kKernelReach2 =
-    std::max({samr::kReachCells2, radapt::kReachCells2, subdivide::kReachCells2});
-// Twice the reach: the partition tests pass with the reach itself, fail with 0.
-inline constexpr int kGhostFactor2 = 2;
-// Coarse cells around a partition box that its kernel also meshes, by default, in 2D (4),
-// and, in cells of an inclusion's own level, the margin around its bounding box (rule
-// level_aware, 4·h_R).
-inline constexpr double kDefaultGhostCells = kGhostFactor2 * kKernelReach2;
+// 2D (README.md, "Ghost region (2D)"): the forest is right beyond the first coarse layer of
+// the range (samr::kReachCoarseCells2), and a decision about a box cell reads cells at most
+// kKernelReach2 cells of its level beyond it (r-adaptivity: the cells around a node;
+// subdivision: its corners' final positions), at most one coarse cell.
+inline constexpr int kKernelReach2 = std::max(radapt::kReachCells2, subdivide::kReachCells2);
+// Coarse cells around a partition box that its kernel also meshes in 2D: 2, at any level
+// (the sweep of README.md: 606 runs the whole-domain mesh with 2, 579 not with 1).
+inline constexpr int kGhostMargin2 = samr::kReachCoarseCells2 + kKernelReach2;
+// 2D, in cells of an inclusion's own level, the margin around its bounding box within which
+// a partition loads it (rule level_aware, 4·h_R; the range's cut lists need only the
+// inclusions that meet it).
+inline constexpr double kDefaultGhostCells = 2 * samr::kReachCells2;
 
 // 3D (README.md, "Ghost region (3D)"): how far a decision about a cell of the box can look
 // beyond the box's face, on data the partition must hold exactly as the whole-domain run
@@ -71,8 +74,8 @@ struct GhostRule {
   // (3D inflates by kBoxSlack3 only.)
   bool level_aware = true;
   double fixed_cells = 3;
-  // 2D: coarse cells around the box itself (kDefaultGhostCells).
-  double box_margin_cells = kDefaultGhostCells;
+  // 2D: coarse cells around the box itself (kGhostMargin2).
+  double box_margin_cells = kGhostMargin2;
   // 3D: coarse cubes around the box, meshed, whose inclusions are all loaded. 0 (default):
   // ghost_margin3 of the coarsest effective level among the inclusions within
   // ghost_margin3(0) cubes of the box and of the lattice's Lmax (1 when there is no

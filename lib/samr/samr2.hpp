@@ -26,6 +26,15 @@ namespace cisamr::samr {
 // pipeline::effective_levels2 passed in, no rule carries a level from one inclusion to
 // another, so this bounds what a partition's ghost must hold (lib/parallel/ghost.hpp).
 inline constexpr int kReachCells2 = 2;
+// Where a run over part of the domain (a partition's range, its cells beyond missing) can
+// refine differently from the whole-domain run, in coarse cells from the range's edge. With
+// those levels no cut cell ends finer than its inclusion's level in either run (R2 and R4's
+// "no finer edge neighbour" never fire there), and the range's cut lists are exact, so the
+// differences are the cells refined because of cut cells beyond the edge: R4's band around
+// them (1 cell of their level L) and R3's cascade from that band (h_{L-1} + … + h_1), in
+// all h_L + … + h_1 < 1 coarse cell: inside the first coarse layer of the range. (The
+// partition refines a subset of the whole run's cells: missing cells trigger nothing.)
+inline constexpr int kReachCoarseCells2 = 1;
 
 // Per cell (TouchLists): inclusions whose boundary meets the closed cell.
 struct RefinedGrid2 : TouchLists {

@@ -1,6 +1,7 @@
 #pragma once
 // Scenes and checks shared by the serial and the MPI tests of lib/parallel.
 #include <cmath>
+#include <numbers>
 #include <random>
 #include <string>
 #include <vector>
@@ -123,6 +124,40 @@ inline geometry::SceneDesc periodic_plane_scene() {
   add(Polygon{{{0, 3}, {3.5, 3}, {3.5, 7}, {0, 7}}}, 2);
   add(Polygon{{{0, 0}, {2, 0}, {2, 3}, {0, 3}}}, 3);  // meets box 2 along y = 3: triple points
   add(Circle{{9.3, 11.6}, 1.7}, 3);
+  return s;
+}
+
+// Packed scenes like the 2D benchmark's (validation/bench/bench_parallel.sh): non-overlapping
+// circles of two phases covering about `fraction` of an nx × ny domain (h = 1), radii
+// 0.7-1.3 of the mean, gaps of at least `gap` cells, every inclusion at `levels`.
+inline geometry::SceneDesc packed_scene2(unsigned seed, int levels, int nx, int ny, double fraction = 0.3,
+                                         double mean_radius = 2.5, double gap = 0.5) {
+  using namespace geometry;
+  std::mt19937_64 rng(seed);
+  const auto uniform = [&](double a, double b) { return std::uniform_real_distribution<double>(a, b)(rng); };
+  SceneDesc s;
+  s.source = "packed-" + std::to_string(seed);
+  s.dimension = 2;
+  s.h = 1;
+  s.domain_min = {0, 0, 0};
+  s.domain_max = {static_cast<double>(nx), static_cast<double>(ny), 0};
+  s.levels = levels;
+  s.phases = {{1, "matrix", false}, {2, "particle", false}, {3, "fibre", false}};
+  const int count = static_cast<int>(fraction * nx * ny / (std::numbers::pi * mean_radius * mean_radius));
+  struct Disk { double x, y, r; };
+  std::vector<Disk> placed;
+  for (int attempt = 0; attempt < 200 * count && static_cast<int>(placed.size()) < count; ++attempt) {
+    const double r = mean_radius * uniform(0.7, 1.3), x = uniform(0, nx), y = uniform(0, ny);
+    bool ok = true;
+    for (const Disk& d : placed) ok = ok && std::hypot(x - d.x, y - d.y) >= r + d.r + gap;
+    if (!ok) continue;
+    placed.push_back({x, y, r});
+    Inclusion inc;
+    inc.shape = Circle{{x, y}, r};
+    inc.phase = 2 + static_cast<int>(placed.size() % 2);
+    inc.levels = levels;
+    s.inclusions.push_back(std::move(inc));
+  }
   return s;
 }
 

@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <random>
@@ -224,6 +226,31 @@ TEST_P(Invariance, SparseRandomScenes) {
   }
 }
 
+// Packed scenes like the benchmark's at every level: the 2-cell margin holds at each
+// (lib/parallel/README.md, "Ghost region (2D)").
+TEST_P(Invariance, PackedScenesAtEveryLevel) {
+  for (int levels = 0; levels <= 3; ++levels) {
+    SCOPED_TRACE("levels " + std::to_string(levels));
+    expect_invariant(testing::packed_scene2(40 + static_cast<unsigned>(levels), levels, 48, 40), GetParam(), true, false);
+  }
+}
+
+// One coarse cell of margin is too few: a box cell's neighbour beyond the face lies in the
+// first layer of the range, which the whole run may refine more (cascades from cells the
+// partition does not have).
+TEST(Invariance, OneCellMarginBreaksIt) {
+  GhostRule one;
+  one.box_margin_cells = 1;
+  int differing = 0;
+  for (int levels = 0; levels <= 3; ++levels) {
+    const geometry::SceneDesc scene = testing::packed_scene2(40 + static_cast<unsigned>(levels), levels, 48, 40);
+    const testing::RunOutcome seq = testing::run_sequential(scene);
+    const testing::RunOutcome par = testing::run_parallel(kSerial, scene, 7, one);
+    differing += seq.failed || par.failed || par.checksum != seq.checksum;
+  }
+  EXPECT_GE(differing, 3);
+}
+
 // The tests can fail: without the ghost margins the merged mesh is not the sequential one.
 TEST(Invariance, NoMarginBreaksIt) {
   GhostRule none;
@@ -325,6 +352,46 @@ TEST_P(Invariance, CohesiveCellsOnPeriodicPlanes) {
 }
 
 INSTANTIATE_TEST_SUITE_P(OneRank, Invariance, ::testing::Values(1, 7, 13));
+
+// The sweep behind the 2D margin (lib/parallel/README.md, "Ghost region (2D)"): scenes of
+// every kind at levels 0-3 against the whole-domain mesh at 4 to 64 partitions; minutes, so
+// not in the suite: `test_parallel --gtest_also_run_disabled_tests
+// --gtest_filter='*SweepOfPackedAndRandomScenes'`.
+TEST(Invariance, DISABLED_SweepOfPackedAndRandomScenes) {
+  GhostRule rule;
+  if (const char* m = std::getenv("CISAMR_SWEEP_MARGIN2")) rule.box_margin_cells = std::atof(m);
+  int runs = 0, differing = 0;
+  const auto check = [&](const geometry::SceneDesc& scene, const std::string& name, const pipeline::Options& options = {}) {
+    const testing::RunOutcome seq = testing::run_sequential(scene, options);
+    ASSERT_FALSE(seq.failed) << name << ": " << seq.error;
+    for (int n : {4, 7, 13, 16, 27, 64}) {
+      const testing::RunOutcome par = testing::run_parallel(kSerial, scene, n, rule, options);
+      ++runs;
+      const bool same = !par.failed && par.checksum == seq.checksum && par.mesh.cell_count() == seq.mesh.cell_count();
+      differing += same ? 0 : 1;
+      EXPECT_TRUE(same) << name << ", " << n << " partitions" << (par.failed ? ": " + par.error : "");
+    }
+  };
+  for (unsigned seed = 1; seed <= 6; ++seed)
+    for (int levels = 0; levels <= 3; ++levels)
+      check(testing::packed_scene2(seed, levels, 48, 40), "packed, level " + std::to_string(levels) + ", seed " + std::to_string(seed));
+  pipeline::Options no_extra, cohesive;
+  no_extra.extra_levels = 0;
+  cohesive.cohesive = true;
+  for (unsigned seed = 1; seed <= 4; ++seed)
+    for (int levels = 0; levels <= 2; ++levels) {
+      const geometry::SceneDesc s = testing::packed_scene2(100 + seed, levels, 48, 40, 0.35, 1.5, 0.2);
+      const std::string name = "dense small, level " + std::to_string(levels) + ", seed " + std::to_string(seed);
+      check(s, name);
+      check(s, name + ", no extra levels", no_extra);
+    }
+  for (unsigned seed = 1; seed <= 4; ++seed) check(testing::random_scene(seed), "cohesive, seed " + std::to_string(seed), cohesive);
+  for (unsigned seed = 17; seed <= 48; ++seed) check(testing::random_scene(seed), "random, seed " + std::to_string(seed));
+  for (unsigned seed = 17; seed <= 40; ++seed) check(testing::sparse_random_scene(seed), "sparse, seed " + std::to_string(seed));
+  for (unsigned seed = 5; seed <= 12; ++seed) check(cisamr::testing::periodic_scene(seed), "periodic, seed " + std::to_string(seed));
+  check(testing::corner_scene(), "corner");
+  std::printf("%d runs, %d differ from the whole-domain mesh (margin %g)\n", runs, differing, rule.box_margin_cells);
+}
 
 TEST(Invariance, PartitionCornersAreStraddled) {
   const geometry::SceneDesc scene = testing::corner_scene();

@@ -47,7 +47,9 @@ TEST(Samr2, RulesHoldOnRandomScenes) {
           const std::int32_t n = f.find(level, cell.i + di, cell.j + dj);
           if (n < 0) continue;
           EXPECT_TRUE(f.is_leaf(n)) << "finer cell near a cut cell";
-          if (std::abs(di) <= 1 && std::abs(dj) <= 1) EXPECT_EQ(f.cell(n).level, level);
+          if (std::abs(di) <= 1 && std::abs(dj) <= 1) {
+            EXPECT_EQ(f.cell(n).level, level);
+          }
         }
     }
     EXPECT_GT(cut, 0u);
