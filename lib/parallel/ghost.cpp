@@ -205,7 +205,7 @@ GhostRegion<Dim> grow(const InclusionIndex<Dim>& index, const grid::Lattice<Dim>
 }  // namespace
 
 int ghost_margin3(int level, int max_level) {
-  const double samr_reach = samr::reach_coarse_cells3(std::max(0, max_level));  // < kSamrReach3
+  const double samr_reach = samr::reach_coarse_cells3(max_level);
   return static_cast<int>(std::ceil(samr_reach + std::ldexp(kKernelReach3, -std::max(0, level)))) + kGhostSafety3;
 }
 

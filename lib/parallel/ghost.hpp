@@ -41,11 +41,10 @@ inline constexpr double kDefaultGhostCells = 2 * samr::kReachCells2;
 
 // 3D (README.md, "Ghost region (3D)"): how far a decision about a cell of the box can look
 // beyond the box's face, on data the partition must hold exactly as the whole-domain run
-// holds it: the SAMR forest is right samr::reach_coarse_cells3(Lmax) coarse cubes inside
-// the region (at most samr::kReachCoarseCells3 = 2), and on top of it the snapping guard
+// holds it: the SAMR forest is right beyond the first coarse cube inside the region
+// (samr::reach_coarse_cells3: 1, 0 when nothing refines), and on top of it the snapping guard
 // (3), face swapping (5) and subdivision (3) read cells of the level of the leaves that
 // decide.
-inline constexpr double kSamrReach3 = samr::kReachCoarseCells3;  // coarse cubes, any Lmax
 inline constexpr double kKernelReach3 =                          // cells of the deciding level
     std::max({radapt::kReachCells3, faceswap::kReachCells3, subdivide::kReachCells3});
 inline constexpr int kGhostSafety3 = 1;  // coarse cubes on top of the bound
@@ -61,10 +60,9 @@ inline constexpr int kRadaptWindow3 = kSwapWindow3 + 1 + radapt::kReachCells3;
 
 // Coarse cubes of ghost a 3D box needs when the coarsest effective level among the
 // inclusions near it is `level` and the lattice's finest is `max_level`:
-// ⌈samr::reach_coarse_cells3(max_level) + kKernelReach3 / 2^level⌉ + kGhostSafety3, both
-// reaches counted in cells of their levels (Lmax 2, level 2: ⌈1.5 + 1.25⌉ + 1 = 4). Without
-// `max_level`, the bound for any Lmax: ⌈kSamrReach3 + kKernelReach3 / 2^level⌉ +
-// kGhostSafety3 (8 at level 0, 6 at level 1, 5 at level 2, 4 from level 3 on), the widest.
+// ⌈samr::reach_coarse_cells3(max_level) + kKernelReach3 / 2^level⌉ + kGhostSafety3, the
+// kernel's reach counted in cells of its level (level 2: ⌈1 + 1.25⌉ + 1 = 4): 7 at level 0,
+// 5 at level 1, 4 at level 2, 3 from level 3 on; 6 when nothing refines (Lmax 0).
 int ghost_margin3(int level, int max_level = 64);
 
 struct GhostRule {

@@ -31,17 +31,17 @@ namespace cisamr::samr {
 // a region starts, or, missing there, does not start) can travel into the region. Rule B
 // moves it by one leaf one level coarser per step, R4 only along the one-cell band around
 // cut leaves of one level (the effective levels keep it from reaching another interface's
-// band), so from level-L cut leaves h_{L-1} + h_{L-2} + ... + h_0 < 2 coarse cells,
-// whatever the number of sweeps (lib/parallel/README.md, "Ghost region (3D)").
-inline constexpr int kReachCoarseCells3 = 2;
-// The same sum for a forest no finer than `max_level` (its lattice's Lmax): the reach in
-// coarse cells counted in cells of each level, 2 − 2^(1 − Lmax) (0 at Lmax = 0: nothing
-// refines; 1 at Lmax = 1; 1.5 at 2), instead of the bound 2 for any Lmax.
-constexpr double reach_coarse_cells3(int max_level) {
-  double reach = 0, cell = 1;
-  for (int level = 0; level < max_level; ++level, cell /= 2) reach += cell;
-  return reach;
-}
+// band). From level-L cut leaves beyond the region's face the band and the B steps down to
+// level 1 reach h_{L-1} + ... + h_1 < 1 cube deep, so the last step refines a level-0 tet
+// of a cube of the region's first layer (cubes are aligned with the face), which ends 1
+// cube deep; the level-1 midpoints it leaves on that layer's far face trigger no rule in
+// the second layer (B needs a node two levels finer, R4 a cut leaf whose level the
+// effective levels would have raised). So differences stay within the first cube, whatever
+// the number of sweeps (lib/parallel/README.md, "Ghost region (3D)").
+inline constexpr int kReachCoarseCells3 = 1;
+// The reach for a forest no finer than `max_level` (its lattice's Lmax): 0 at Lmax = 0
+// (nothing refines), kReachCoarseCells3 otherwise.
+constexpr double reach_coarse_cells3(int max_level) { return max_level > 0 ? kReachCoarseCells3 : 0; }
 
 // Per tet (TouchLists): inclusions whose boundary meets the tet's closed bounding box.
 // Conservative: a tet with an empty list lies inside one phase.

@@ -117,43 +117,43 @@ TEST(Scenes3, AreValid) {
 }
 
 // ⌈SAMR's reach + 5/2^l⌉ + 1 coarse cubes, chosen by the coarsest effective level l near the
-// box; SAMR's reach h_0 + … + h_{Lmax−1} (2 for any Lmax).
+// box; SAMR's reach is the first cube of the region (0 when nothing refines), whatever Lmax.
 TEST(GhostMargin3, FollowsTheCoarsestLevelNearTheBox) {
-  EXPECT_EQ(ghost_margin3(0), 8);
-  EXPECT_EQ(ghost_margin3(1), 6);
-  EXPECT_EQ(ghost_margin3(2), 5);
-  EXPECT_EQ(ghost_margin3(3), 4);
-  EXPECT_EQ(ghost_margin3(6), 4);
+  EXPECT_EQ(ghost_margin3(0), 7);
+  EXPECT_EQ(ghost_margin3(1), 5);
+  EXPECT_EQ(ghost_margin3(2), 4);
+  EXPECT_EQ(ghost_margin3(3), 3);
+  EXPECT_EQ(ghost_margin3(6), 3);
   EXPECT_EQ(samr::reach_coarse_cells3(0), 0.0);
   EXPECT_EQ(samr::reach_coarse_cells3(1), 1.0);
-  EXPECT_EQ(samr::reach_coarse_cells3(2), 1.5);
-  EXPECT_EQ(samr::reach_coarse_cells3(3), 1.75);
+  EXPECT_EQ(samr::reach_coarse_cells3(2), 1.0);
+  EXPECT_EQ(samr::reach_coarse_cells3(5), 1.0);
   EXPECT_EQ(ghost_margin3(0, 0), 6);  // nothing refines: the kernel's 5 cubes and the safety
-  EXPECT_EQ(ghost_margin3(0, 2), 8);
+  EXPECT_EQ(ghost_margin3(0, 2), 7);
   EXPECT_EQ(ghost_margin3(1, 1), 5);
-  EXPECT_EQ(ghost_margin3(1, 3), 6);
+  EXPECT_EQ(ghost_margin3(1, 3), 5);
   EXPECT_EQ(ghost_margin3(2, 2), 4);
-  EXPECT_EQ(ghost_margin3(3, 3), 4);
+  EXPECT_EQ(ghost_margin3(3, 3), 3);
   geometry::SceneDesc s;
   s.dimension = 3;
   s.domain_max = {8, 4, 4};
   s.h = 0.125;  // 64 x 32 x 32 cubes
   s.phases = {{1, "m", false}, {2, "a", false}};
   s.inclusions.push_back({geometry::Sphere{{2.0, 2.0, 2.0}, 0.2}, 2, 2});
-  s.inclusions.push_back({geometry::Sphere{{6.0, 2.0, 2.0}, 0.2}, 2, 0});  // 27 cubes from the box
-  // Lmax = 2 + the default 3 extra levels: SAMR may reach 1.94 cubes, ⌈1.94 + 1.25⌉ + 1.
+  s.inclusions.push_back({geometry::Sphere{{6.0, 2.0, 2.0}, 0.2}, 2, 0});  // 24 cubes from the box
+  // Lmax = 2 + the default 3 extra levels: SAMR reaches into the first cube, ⌈1 + 1.25⌉ + 1.
   const auto lattice = scene_lattice<3>(s, {});
   ASSERT_EQ(lattice.max_level, 5);
   const InclusionIndex3 index(s, lattice, GhostRule{});
   const grid::CellRange<3> box{{8, 8, 8}, {24, 24, 24}};  // x in [1, 3]
   std::vector<int> levels{2, 0};
   GhostRegion3 r = ghost_region3(index, lattice, box, GhostRule{}, levels);
-  EXPECT_EQ(r.margin, 5);
-  EXPECT_EQ(r.ghost, 5);
-  EXPECT_EQ(r.range.lo[0], 3);
-  EXPECT_EQ(r.range.hi[0], 29);
+  EXPECT_EQ(r.margin, 4);
+  EXPECT_EQ(r.ghost, 4);
+  EXPECT_EQ(r.range.lo[0], 4);
+  EXPECT_EQ(r.range.hi[0], 28);
   EXPECT_EQ(r.inclusions, (std::vector<std::int32_t>{0}));
-  // Without extra levels (Lmax 2) SAMR reaches 1.5 cubes: ⌈1.5 + 1.25⌉ + 1.
+  // Without extra levels (Lmax 2): the same.
   pipeline::Options no_extra;
   no_extra.extra_levels = 0;
   const auto lattice2 = scene_lattice<3>(s, no_extra);
@@ -163,24 +163,24 @@ TEST(GhostMargin3, FollowsTheCoarsestLevelNearTheBox) {
   EXPECT_EQ(r.margin, 4);
   EXPECT_EQ(r.range.lo[0], 4);
   EXPECT_EQ(r.range.hi[0], 28);
-  // The level-0 sphere within 8 cubes of the box's +x face (and near the ±y and ±z faces'
+  // The level-0 sphere within 7 cubes of the box's +x face (and near the ±y and ±z faces'
   // slabs): their margin, and it is loaded. The -x face has only the level-2 sphere within
-  // 8 cubes: its own margin, 5.
+  // 7 cubes: its own margin, 4.
   s.inclusions[1].shape = geometry::Sphere{{3.7, 2.0, 2.0}, 0.2};
   const InclusionIndex3 near(s, lattice, GhostRule{});
   r = ghost_region3(near, lattice, box, GhostRule{}, levels);
-  EXPECT_EQ(r.margin, 8);
+  EXPECT_EQ(r.margin, 7);
   EXPECT_EQ(r.inclusions, (std::vector<std::int32_t>{0, 1}));
-  EXPECT_EQ(r.range.lo[0], 3);
-  EXPECT_EQ(r.range.hi[0], 32);
-  EXPECT_EQ(r.sides, (pipeline::GhostSides{{{5, 8}, {8, 8}, {8, 8}}}));
-  // Near the -x face instead: that face's margin (down to the domain's face).
+  EXPECT_EQ(r.range.lo[0], 4);
+  EXPECT_EQ(r.range.hi[0], 31);
+  EXPECT_EQ(r.sides, (pipeline::GhostSides{{{4, 7}, {7, 7}, {7, 7}}}));
+  // Near the -x face instead: that face's margin.
   s.inclusions[1].shape = geometry::Sphere{{0.3, 2.0, 2.0}, 0.2};
   const InclusionIndex3 near_low(s, lattice, GhostRule{});
   r = ghost_region3(near_low, lattice, box, GhostRule{}, levels);
-  EXPECT_EQ(r.range.lo[0], 0);
-  EXPECT_EQ(r.range.hi[0], 29);
-  EXPECT_EQ(r.sides, (pipeline::GhostSides{{{8, 5}, {8, 8}, {8, 8}}}));
+  EXPECT_EQ(r.range.lo[0], 1);
+  EXPECT_EQ(r.range.hi[0], 28);
+  EXPECT_EQ(r.sides, (pipeline::GhostSides{{{7, 4}, {7, 7}, {7, 7}}}));
   // No inclusion near: one cube.
   const grid::CellRange<3> far{{40, 0, 0}, {44, 4, 4}};
   r = ghost_region3(near, lattice, far, GhostRule{}, levels);
@@ -294,29 +294,31 @@ TEST(Invariance3, SixtyFourPartitions) {
   EXPECT_GT(inside, 64);
 }
 
-// Without extra levels (Lmax = the scenes' levels, as E4 is meshed) SAMR reaches 1 cube at
-// Lmax 1 and 1.5 at Lmax 2, so the default ghost is one cube narrower (5 and 4 instead of 6
-// and 5): still the whole-domain mesh.
-TEST(Invariance3, WithoutExtraLevelsTheGhostIsNarrower) {
+// SAMR's reach is the region's first cube whatever Lmax, so level-1 and level-2 scenes take
+// 5 and 4 cubes with or without extra levels (6 and 5 with them before): still the
+// whole-domain mesh.
+TEST(Invariance3, LevelOneAndTwoTakeFiveAndFourCubes) {
   pipeline::Options no_extra;
   no_extra.extra_levels = 0;
   const std::vector<std::pair<geometry::SceneDesc, int>> scenes{{testing::packed_scene3(12, 1, 16, 16, 12, 80), 5},
                                                                 {testing::packed_scene3(13, 2, 10, 10, 8, 30), 4}};
-  for (const auto& [scene, margin] : scenes) {
-    const testing::RunOutcome3 seq = testing::run_sequential3(scene, no_extra);
-    EXPECT_GT(seq.counters.refused_nodes, 0);
-    for (int n : {7, 27, 64}) {
-      SCOPED_TRACE("level " + std::to_string(scene.levels) + ", " + std::to_string(n) + " partitions");
-      const testing::RunOutcome3 par = testing::run_parallel3(kSerial, scene, n, {}, no_extra);
-      expect_invariant3(seq, par, scene);
-      int narrowed = 0;
-      for (const auto& p : par.distributed.partitions) {
-        EXPECT_LE(p.ghost, margin);
-        narrowed += p.ghost == margin ? 1 : 0;
+  for (const auto& [scene, margin] : scenes)
+    for (const pipeline::Options& options : {pipeline::Options{}, no_extra}) {
+      const testing::RunOutcome3 seq = testing::run_sequential3(scene, options);
+      EXPECT_GT(seq.counters.refused_nodes, 0);
+      for (int n : {7, 27, 64}) {
+        SCOPED_TRACE("level " + std::to_string(scene.levels) + ", " + std::to_string(options.extra_levels) +
+                     " extra levels, " + std::to_string(n) + " partitions");
+        const testing::RunOutcome3 par = testing::run_parallel3(kSerial, scene, n, {}, options);
+        expect_invariant3(seq, par, scene);
+        int narrowed = 0;
+        for (const auto& p : par.distributed.partitions) {
+          EXPECT_LE(p.ghost, margin);
+          narrowed += p.ghost == margin ? 1 : 0;
+        }
+        EXPECT_GT(narrowed, 0);
       }
-      EXPECT_GT(narrowed, 0);
     }
-  }
 }
 
 // Each face its own margin: on a scene of level-0 spheres beside level-2 ones, boxes whose
@@ -388,6 +390,16 @@ TEST(Invariance3, DISABLED_SweepOfSparseAndMixedScenes) {
     check(s, no_extra, "levels 0 and 1 without extra levels, seed " + std::to_string(seed));
   }
   check(testing::mixed_level_scene3(), {}, "levels 0 and 2");
+  // Packed scenes with the default extra levels (margins 5 at level 1, 4 at level 2, 3 at
+  // level 3: SAMR's reach is the first cube whatever Lmax) and without them at level 3.
+  for (std::uint64_t seed = 700; seed < 706; ++seed) {
+    check(testing::packed_scene3(seed, 1, 16, 16, 12, 80), {}, "packed, level 1, seed " + std::to_string(seed));
+    check(testing::packed_scene3(seed, 2, 10, 10, 8, 30), {}, "packed, level 2, seed " + std::to_string(seed));
+  }
+  for (std::uint64_t seed = 710; seed < 713; ++seed) {
+    check(testing::packed_scene3(seed, 3, 8, 8, 6, 12), {}, "packed, level 3, seed " + std::to_string(seed));
+    check(testing::packed_scene3(seed, 3, 8, 8, 6, 12), no_extra, "packed, level 3 without extra levels, seed " + std::to_string(seed));
+  }
   std::printf("%d runs, %d with partitions whose ghost is narrower on some face\n", runs, narrowed_runs);
 }
 
@@ -424,7 +436,9 @@ TEST(Invariance3, WindowsLeaveOutTheGhostsOuterPart) {
     EXPECT_EQ(whole.distributed.counters.snapping_leaves, w.leaves);
     if (c.name == "packed-level0")
       EXPECT_EQ(w.snapping_leaves, w.leaves);
-    else
+    else if (c.name == "packed-level1")  // r-adaptivity's 8 cells: 4 of the 5 ghost cubes
+      EXPECT_LT(w.snapping_leaves, w.leaves);
+    else  // 2 of 4 cubes
       EXPECT_LT(w.snapping_leaves, 0.9 * static_cast<double>(w.leaves));
   }
 }
