@@ -353,8 +353,9 @@ TEST(Invariance3, EachFaceTakesTheMarginOfWhatLiesNearIt) {
   EXPECT_LT(r.sides[0][1], r.sides[0][0]);
 }
 
-// The sweep behind the per-face margins (lib/parallel/README.md, "Ghost region (3D)"): 53
-// scenes at 7, 8, 27 and 64 partitions against the whole-domain mesh, about 2 minutes, so
+// The sweep behind the per-face margins and SAMR's one-cube reach (lib/parallel/README.md,
+// "Ghost region (3D)"): 70 scenes at 7, 8, 27 and 64 partitions against the whole-domain
+// mesh (280 runs), about 3 minutes, so
 // not in the suite: `test_parallel3 --gtest_also_run_disabled_tests
 // --gtest_filter='*SweepOfSparseAndMixedScenes'`.
 TEST(Invariance3, DISABLED_SweepOfSparseAndMixedScenes) {
