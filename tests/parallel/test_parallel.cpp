@@ -17,6 +17,8 @@
 #include "scenes.hpp"
 #include "support/cohesive_compare.hpp"
 #include "quality/quality.hpp"
+#include "pipeline/effective_levels.hpp"
+#include "samr/samr2.hpp"
 
 namespace cisamr::parallel {
 namespace {
@@ -352,6 +354,51 @@ TEST_P(Invariance, CohesiveCellsOnPeriodicPlanes) {
 }
 
 INSTANTIATE_TEST_SUITE_P(OneRank, Invariance, ::testing::Values(1, 7, 13));
+
+// samr::kReachCoarseCells2, directly: SAMR over a sub-range (its cells beyond missing, the
+// inclusions that meet it loaded, the whole scene's effective levels) gives every coarse
+// cell beyond the range's first layer the whole run's leaves; in the first layer it may not.
+TEST(SamrReach2, BeyondTheFirstLayerTheForestIsTheWholeRunsForest) {
+  using Leaf = std::array<std::int64_t, 3>;  // level, i, j
+  const auto leaves = [](const samr::RefinedGrid2& g, const grid::CellRange<2>& inner) {
+    std::vector<Leaf> out;
+    for (std::int32_t c = 0; c < static_cast<std::int32_t>(g.forest.size()); ++c) {
+      if (!g.forest.is_leaf(c)) continue;
+      const auto at = g.forest.coarse_cell(c);
+      if (at[0] < inner.lo[0] || at[0] >= inner.hi[0] || at[1] < inner.lo[1] || at[1] >= inner.hi[1]) continue;
+      const auto& x = g.forest.cell(c);
+      out.push_back({x.level, x.i, x.j});
+    }
+    std::sort(out.begin(), out.end());
+    return out;
+  };
+  int compared = 0, first_layer_differs = 0;
+  for (int levels = 1; levels <= 3; ++levels)
+    for (unsigned seed = 1; seed <= 3; ++seed) {
+      const geometry::SceneDesc scene = testing::packed_scene2(60 + seed, levels, 48, 40);
+      const auto lattice = scene_lattice2(scene, {});
+      const std::vector<int> levels_all = pipeline::effective_levels2(scene, lattice);
+      const samr::RefinedGrid2 whole = samr::refine2(geometry::Oracle2(scene), lattice, {{0, 0}, {48, 40}}, levels_all);
+      const InclusionIndex2 index(scene, lattice, GhostRule{});
+      for (const grid::CellRange<2> range : {grid::CellRange<2>{{7, 5}, {29, 23}}, grid::CellRange<2>{{20, 13}, {41, 35}}}) {
+        std::vector<std::int32_t> loaded;
+        index.query(Box2{{static_cast<double>(range.lo[0]), static_cast<double>(range.lo[1])},
+                         {static_cast<double>(range.hi[0]), static_cast<double>(range.hi[1])}},
+                    loaded);
+        std::vector<int> levels_part;
+        for (std::int32_t k : loaded) levels_part.push_back(levels_all[static_cast<std::size_t>(k)]);
+        const samr::RefinedGrid2 part =
+            samr::refine2(geometry::Oracle2(subset_scene(scene, loaded)), lattice, range, levels_part);
+        const int r = samr::kReachCoarseCells2;
+        const grid::CellRange<2> inner{{range.lo[0] + r, range.lo[1] + r}, {range.hi[0] - r, range.hi[1] - r}};
+        EXPECT_EQ(leaves(part, inner), leaves(whole, inner)) << "levels " << levels << ", seed " << seed;
+        first_layer_differs += leaves(part, range) != leaves(whole, range) ? 1 : 0;
+        ++compared;
+      }
+    }
+  EXPECT_EQ(compared, 18);
+  EXPECT_GT(first_layer_differs, 0);  // the comparison can fail
+}
 
 // The sweep behind the 2D margin (lib/parallel/README.md, "Ghost region (2D)"): scenes of
 // every kind at levels 0-3 against the whole-domain mesh at 4 to 64 partitions; minutes, so

@@ -16,6 +16,8 @@
 #include "parallel/collective.hpp"
 #include "parallel/output.hpp"
 #include "partition/partition.hpp"
+#include "pipeline/effective_levels.hpp"
+#include "samr/samr3.hpp"
 #include "scenes3.hpp"
 #include "support/cohesive_compare.hpp"
 
@@ -351,6 +353,70 @@ TEST(Invariance3, EachFaceTakesTheMarginOfWhatLiesNearIt) {
   EXPECT_EQ(r.sides[0][0], ghost_margin3(0, 2));  // the level-0 spheres within 8 cubes
   EXPECT_EQ(r.sides[0][1], ghost_margin3(2, 2));
   EXPECT_LT(r.sides[0][1], r.sides[0][0]);
+}
+
+// samr::kReachCoarseCells3, directly: SAMR over a sub-range (its cubes beyond missing, the
+// inclusions that meet it loaded, the whole scene's effective levels) gives every cube
+// beyond the range's first layer the whole run's leaves, with and without extra levels; in
+// the first layer it may not.
+TEST(SamrReach3, BeyondTheFirstLayerTheForestIsTheWholeRunsForest) {
+  using Leaf = std::array<std::int64_t, 5>;  // level, cube, local
+  const auto leaves = [](const samr::RefinedGrid3& g, const grid::CellRange<3>& inner) {
+    std::vector<Leaf> out;
+    for (std::int32_t t = 0; t < static_cast<std::int32_t>(g.forest.size()); ++t) {
+      if (!g.forest.is_leaf(t)) continue;
+      const auto at = g.forest.coarse_cell(t);
+      bool in = true;
+      for (int d = 0; d < 3; ++d) in = in && at[static_cast<std::size_t>(d)] >= inner.lo[d] && at[static_cast<std::size_t>(d)] < inner.hi[d];
+      if (!in) continue;
+      const auto& x = g.forest.tet(t);
+      out.push_back({x.level, x.cube[0], x.cube[1], x.cube[2], x.local});
+    }
+    std::sort(out.begin(), out.end());
+    return out;
+  };
+  pipeline::Options no_extra;
+  no_extra.extra_levels = 0;
+  int compared = 0, first_layer_differs = 0;
+  for (int levels = 1; levels <= 2; ++levels)
+    for (std::uint64_t seed = 1; seed <= 2; ++seed)
+      for (const pipeline::Options& options : {pipeline::Options{}, no_extra}) {
+        const geometry::SceneDesc scene = levels == 1 ? testing::packed_scene3(800 + seed, 1, 16, 16, 12, 80)
+                                                      : testing::packed_scene3(800 + seed, 2, 10, 10, 8, 30);
+        const auto lattice = scene_lattice<3>(scene, options);
+        const std::vector<int> levels_all = pipeline::effective_levels3(scene, lattice, pipeline::holding_boxes(scene));
+        const grid::CellRange<3> domain{{0, 0, 0}, {lattice.coarse_cells[0], lattice.coarse_cells[1], lattice.coarse_cells[2]}};
+        const samr::RefinedGrid3 whole = samr::refine3(geometry::Oracle3(scene), lattice, domain, levels_all);
+        const InclusionIndex3 index(scene, lattice, GhostRule{});
+        for (int corner = 0; corner < 2; ++corner) {
+          grid::CellRange<3> range;
+          for (int d = 0; d < 3; ++d) {
+            const std::int64_t n = lattice.coarse_cells[d];
+            range.lo[d] = corner == 0 ? 1 : n / 3;
+            range.hi[d] = corner == 0 ? n - n / 3 : n - 1;
+          }
+          Box3 box;
+          for (int d = 0; d < 3; ++d) {
+            box.min[d] = lattice.origin[d] + static_cast<double>(range.lo[d]) * lattice.h;
+            box.max[d] = lattice.origin[d] + static_cast<double>(range.hi[d]) * lattice.h;
+          }
+          std::vector<std::int32_t> loaded;
+          index.query(box, loaded);
+          std::vector<int> levels_part;
+          for (std::int32_t k : loaded) levels_part.push_back(levels_all[static_cast<std::size_t>(k)]);
+          const samr::RefinedGrid3 part =
+              samr::refine3(geometry::Oracle3(subset_scene(scene, loaded)), lattice, range, levels_part);
+          const int r = samr::kReachCoarseCells3;
+          grid::CellRange<3> inner = range;
+          for (int d = 0; d < 3; ++d) inner.lo[d] += r, inner.hi[d] -= r;
+          EXPECT_EQ(leaves(part, inner), leaves(whole, inner))
+              << "level " << levels << ", seed " << seed << ", " << options.extra_levels << " extra levels, corner " << corner;
+          first_layer_differs += leaves(part, range) != leaves(whole, range) ? 1 : 0;
+          ++compared;
+        }
+      }
+  EXPECT_EQ(compared, 16);
+  EXPECT_GT(first_layer_differs, 0);  // the comparison can fail
 }
 
 // The sweep behind the per-face margins and SAMR's one-cube reach (lib/parallel/README.md,
