@@ -21,7 +21,7 @@ InclusionIndex<Dim>::InclusionIndex(const geometry::SceneDesc& scene, const grid
   double extent_sum = 0, longest = 0;
   for (std::size_t k = 0; k < scene.inclusions.size(); ++k) {
     const double margin = Dim == 3          ? kBoxSlack3 * h
-                          : rule.level_aware ? kDefaultGhostCells * std::ldexp(h, -scene.inclusions[k].levels)
+                          : rule.level_aware ? kInclusionMarginCells2 * std::ldexp(h, -scene.inclusions[k].levels)
                                              : rule.fixed_cells * h;
     Box<Dim> box;
     for (int d = 0; d < Dim; ++d) {

@@ -32,12 +32,12 @@ namespace cisamr::parallel {
 // subdivision: its corners' final positions), at most one coarse cell.
 inline constexpr int kKernelReach2 = std::max(radapt::kReachCells2, subdivide::kReachCells2);
 // Coarse cells around a partition box that its kernel also meshes in 2D: 2, at any level
-// (the sweep of README.md: 606 runs the whole-domain mesh with 2, 579 not with 1).
+// (the sweep of README.md: 702 runs the whole-domain mesh with 2, 635 not with 1).
 inline constexpr int kGhostMargin2 = samr::kReachCoarseCells2 + kKernelReach2;
 // 2D, in cells of an inclusion's own level, the margin around its bounding box within which
 // a partition loads it (rule level_aware, 4·h_R; the range's cut lists need only the
 // inclusions that meet it).
-inline constexpr double kDefaultGhostCells = 2 * samr::kReachCells2;
+inline constexpr double kInclusionMarginCells2 = 2 * samr::kReachCells2;
 
 // 3D (README.md, "Ghost region (3D)"): how far a decision about a cell of the box can look
 // beyond the box's face, on data the partition must hold exactly as the whole-domain run
@@ -67,7 +67,7 @@ int ghost_margin3(int level, int max_level = 64);
 
 struct GhostRule {
   // 2D: margin around every inclusion's bounding box. Level-aware (default):
-  // kDefaultGhostCells·h_R = 4·h_R, h_R = h/2^R, R the inclusion's SAMR levels; two
+  // kInclusionMarginCells2·h_R = 4·h_R, h_R = h/2^R, R the inclusion's SAMR levels; two
   // inclusions whose inflated boxes do not meet cannot change each other's refinement. Fixed: `fixed_cells`·h for every inclusion.
   // (3D inflates by kBoxSlack3 only.)
   bool level_aware = true;
