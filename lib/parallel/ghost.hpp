@@ -42,27 +42,27 @@ inline constexpr double kInclusionMarginCells2 = 2 * samr::kReachCells2;
 // 3D (README.md, "Ghost region (3D)"): how far a decision about a cell of the box can look
 // beyond the box's face, on data the partition must hold exactly as the whole-domain run
 // holds it: the SAMR forest is right beyond the first coarse cube inside the region
-// (samr::reach_coarse_cells3: 1, 0 when nothing refines), and on top of it the snapping guard
-// (3), face swapping (5) and subdivision (3) read cells of the level of the leaves that
-// decide.
+// (samr::reach_coarse_cells3: 1, 0 when nothing refines; tested by SamrReach3), and on top
+// of it the snapping guard (3), face swapping (5) and subdivision (3) read cells of the
+// level of the leaves that decide (tested by KernelReach3).
 inline constexpr double kKernelReach3 =                          // cells of the deciding level
     std::max({radapt::kReachCells3, faceswap::kReachCells3, subdivide::kReachCells3});
-inline constexpr int kGhostSafety3 = 1;  // coarse cubes on top of the bound
 
 // 3D windows of the later stages inside that ghost, in cells of the deciding level (README.md,
 // "Ghost region (3D)"): the forest is needed on the whole ghost for SAMR's sake, but a
 // decision in the box reads face-swap candidates of corner tets at most kCompetitorCells3
-// cells out (window: that + kWindowSafety3), which read the cubes one cell beyond them, whose
-// final node positions read leaves radapt::kReachCells3 further (r-adaptivity's window).
-inline constexpr int kWindowSafety3 = 2;
-inline constexpr int kSwapWindow3 = faceswap::kCompetitorCells3 + kWindowSafety3;
+// cells out (its window), which read the cubes one cell beyond them, whose final node
+// positions read leaves radapt::kReachCells3 further (r-adaptivity's window). No safety on
+// top: KernelReach3 checks these windows directly (2 safety cells each before).
+inline constexpr int kSwapWindow3 = faceswap::kCompetitorCells3;
 inline constexpr int kRadaptWindow3 = kSwapWindow3 + 1 + radapt::kReachCells3;
 
 // Coarse cubes of ghost a 3D box needs when the coarsest effective level among the
-// inclusions near it is `level` and the lattice's finest is `max_level`:
-// ⌈samr::reach_coarse_cells3(max_level) + kKernelReach3 / 2^level⌉ + kGhostSafety3, the
-// kernel's reach counted in cells of its level (level 2: ⌈1 + 1.25⌉ + 1 = 4): 7 at level 0,
-// 5 at level 1, 4 at level 2, 3 from level 3 on; 6 when nothing refines (Lmax 0).
+// inclusions near it is `level` and the lattice's finest is `max_level`: the least whole
+// number greater than samr::reach_coarse_cells3(max_level) + kKernelReach3 / 2^level (greater:
+// the first layer's far face may hold midpoints the partition lacks), the kernel's reach
+// counted in cells of its level (level 2: 1 + 1.25 → 3): 7 at level 0, 4 at level 1, 3 at
+// level 2, 2 from level 3 on; 6 when nothing refines (Lmax 0).
 int ghost_margin3(int level, int max_level = 64);
 
 struct GhostRule {
