@@ -300,9 +300,9 @@ TEST(Invariance3, SixtyFourPartitions) {
 }
 
 // SAMR's reach is the region's first cube whatever Lmax, and the kernel's 5 cells of the
-// level are counted as such, so level-1 and level-2 scenes take 4 and 3 cubes with or
-// without extra levels (6 and 5 with extra levels two changes ago): still the whole-domain
-// mesh.
+// level are counted as such (no safety cube since KernelReach3 tests that reach), so
+// level-1 and level-2 scenes take 4 and 3 cubes with or without extra levels (5 and 4
+// before): still the whole-domain mesh.
 TEST(Invariance3, LevelOneAndTwoTakeFourAndThreeCubes) {
   pipeline::Options no_extra;
   no_extra.extra_levels = 0;
@@ -429,8 +429,8 @@ TEST(SamrReach3, BeyondTheFirstLayerTheForestIsTheWholeRunsForest) {
 // get no nodes, make no options, refusals or swap candidates: as if missing), the box's
 // mesh is the whole run's for w = kKernelReach3 (the margin counts that much beyond SAMR's
 // first layer), and for the windows the partitions use (face swapping kSwapWindow3 =
-// kCompetitorCells3, r-adaptivity kRadaptWindow3 = that + 1 + radapt::kReachCells3). With half a cell it
-// may not be (so the comparison can fail). Boxes of a 3×3×2 split: box 13 has six inner
+// kCompetitorCells3, r-adaptivity kRadaptWindow3 = that + 1 + radapt::kReachCells3). With
+// half a cell it may not be (so the comparison can fail). Boxes of a 3×3×2 split: box 13 has six inner
 // faces, the others meet the domain. Returns the boxes compared and how many differ with
 // half-cell windows.
 std::pair<int, int> compare_kernel_reach(const std::vector<testing::Case3>& cases, std::span<const int> boxes) {
