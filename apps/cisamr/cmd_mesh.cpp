@@ -16,6 +16,7 @@
 #include "driver/driver.hpp"
 #include "io/atomic_file.hpp"
 #include "parallel/collective.hpp"
+#include "parallel/ghost.hpp"
 #include "parallel/session.hpp"
 
 namespace cisamr::app {
@@ -219,7 +220,9 @@ void add_mesh_command(CLI::App& app, GlobalFlags& flags, int& exit_code) {
       ->group("");
   cmd->add_option("--ghost-windows", ghost.radapt_window_cells3,
                   "Comparison (3D): r-adaptivity's window around a partition box, in cells of the deciding level "
-                  "(face swapping's: 4 fewer, at least half a cell), instead of the derived ones (8 and 4; 0: those); "
+                  "(face swapping's: " + std::to_string(parallel::kRadaptWindow3 - parallel::kSwapWindow3) +
+                      " fewer, at least half a cell), instead of the derived ones (" + std::to_string(parallel::kRadaptWindow3) +
+                      " and " + std::to_string(parallel::kSwapWindow3) + "; 0: those); "
                   "-1: both on the whole ghost, as before the windows (lib/parallel/README.md); too small ones break partition "
                   "invariance")
       ->check(named("--ghost-windows", number_in(-1, 1e6)))
