@@ -278,6 +278,10 @@ GhostRegion3 ghost_region3(const InclusionIndex3& index, const grid::Lattice<3>&
     };
     region.radapt_reach = reach(rule.radapt_window_cells3, kRadaptWindow3);
     region.swap_reach = reach(rule.swap_window3_cells(), kSwapWindow3);
+    // Forced windows (comparisons) run the guard on all of r-adaptivity's, as before.
+    const bool forced = rule.radapt_window_cells3 != 0 || rule.swap_window_cells3 != 0;
+    region.first_pass_reach = forced ? region.radapt_reach : reach(0, kFirstPassWindow3);
+    region.second_pass_reach = forced ? region.radapt_reach : reach(0, kSecondPassWindow3);
   }
   return region;
 }

@@ -52,10 +52,14 @@ inline constexpr double kKernelReach3 =                          // cells of the
 // "Ghost region (3D)"): the forest is needed on the whole ghost for SAMR's sake, but a
 // decision in the box reads face-swap candidates of corner tets at most kCompetitorCells3
 // cells out (its window), which read the cubes one cell beyond them, whose final node
-// positions read leaves radapt::kReachCells3 further (r-adaptivity's window). No safety on
-// top: KernelReach3 checks these windows directly (2 safety cells each before).
+// positions read leaves radapt::kReachCells3 further (r-adaptivity's window). Of that window
+// the guard's second pass needs the leaves within radapt::kSecondPassCells3 of those
+// positions, its first pass those within kFirstPassCells3. No safety on top: KernelReach3
+// checks these windows directly (2 safety cells each before).
 inline constexpr int kSwapWindow3 = faceswap::kCompetitorCells3;
 inline constexpr int kRadaptWindow3 = kSwapWindow3 + 1 + radapt::kReachCells3;
+inline constexpr int kFirstPassWindow3 = kSwapWindow3 + 1 + radapt::kFirstPassCells3;
+inline constexpr int kSecondPassWindow3 = kSwapWindow3 + 1 + radapt::kSecondPassCells3;
 
 // Coarse cubes of ghost a 3D box needs when the coarsest effective level among the
 // inclusions near it is `level` and the lattice's finest is `max_level`: the least whole
@@ -82,10 +86,11 @@ struct GhostRule {
   // are not inflated (level_aware and fixed_cells are 2D rules): the margin covers that.
   double margin3_cubes = 0;
   // 3D: the windows of r-adaptivity and face swapping, in cells of the deciding level
-  // (pipeline::Ghost). 0 (default): kRadaptWindow3 and kSwapWindow3; > 0: that many
-  // (comparisons, and the tests that show a too small window breaks invariance); < 0: every
-  // leaf of the ghost (as before the windows). Face swapping's at 0 follows a forced
-  // r-adaptivity's (swap_window3_cells()).
+  // (pipeline::Ghost). 0 (default): kRadaptWindow3 and kSwapWindow3, the guard's passes on
+  // kFirstPassWindow3 and kSecondPassWindow3; > 0: that many, the guard on all of
+  // r-adaptivity's (comparisons, and the tests that show a too small window breaks
+  // invariance); < 0: every leaf of the ghost (as before the windows). Face swapping's at 0
+  // follows a forced r-adaptivity's (swap_window3_cells()).
   double radapt_window_cells3 = 0, swap_window_cells3 = 0;
   // Face swapping's window in use when r-adaptivity's is forced and its own is not: that
   // less the cells between them (kRadaptWindow3 − kSwapWindow3), at least ½; -1 with -1.
@@ -151,13 +156,14 @@ struct GhostRegion {
   pipeline::GhostSides sides{};
   int ghost = 0;               // uniform width that covers `range` (the widest side)
   int margin = 0;              // 3D: the widest side's margin (coarse cubes)
-  // 3D: r-adaptivity's and face swapping's windows, fine lattice units (-1: every leaf).
-  std::int64_t radapt_reach = -1, swap_reach = -1;
+  // 3D: r-adaptivity's, its guard's passes' and face swapping's windows, fine lattice units
+  // (-1: every leaf).
+  std::int64_t radapt_reach = -1, swap_reach = -1, first_pass_reach = -1, second_pass_reach = -1;
   std::vector<std::int32_t> inclusions;  // scene indices, ascending
 };
 template <int Dim>
 pipeline::Ghost kernel_ghost(const GhostRegion<Dim>& region) {
-  return {region.sides, region.radapt_reach, region.swap_reach};
+  return {region.sides, region.radapt_reach, region.swap_reach, region.first_pass_reach, region.second_pass_reach};
 }
 using GhostRegion2 = GhostRegion<2>;
 using GhostRegion3 = GhostRegion<3>;

@@ -39,6 +39,8 @@ MeshParts<3> run_stages(const geometry::Oracle3& oracle, const grid::Lattice3& l
                                           .max_candidates = options.max_candidates3,
                                           .bound = options.bound3,
                                           .window = window(ghost.radapt_reach),
+                                          .first_pass_window = window(ghost.first_pass_reach),
+                                          .second_pass_window = window(ghost.second_pass_reach),
                                           .progress = options.progress});
   }();
   release_free_memory();

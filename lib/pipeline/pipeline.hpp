@@ -102,12 +102,15 @@ MeshEstimate estimate_mesh(const geometry::SceneDesc& scene);
 // SAMR builds its forest on `sides` coarse cells beyond each face of the box (3D: each
 // face's own, from what lies near it); in 3D r-adaptivity and face swapping then work only
 // on the leaves within their reach of the box (fine lattice units, grid::LeafWindow; -1:
-// every leaf), which is all their decisions in the box read. Windows need the box and the
-// forest in one frame: not on a periodic lattice (-1 there).
+// every leaf), which is all their decisions in the box read, and r-adaptivity's guard runs
+// its first and second pass on narrower windows still. Windows need the box and the forest
+// in one frame: not on a periodic lattice (-1 there).
 struct Ghost {
   GhostSides sides{};
   std::int64_t radapt_reach = -1;
   std::int64_t swap_reach = -1;
+  std::int64_t first_pass_reach = -1;
+  std::int64_t second_pass_reach = -1;
 };
 
 // Meshes the coarse cells of `box` (global coarse indices), using the `ghost` around it

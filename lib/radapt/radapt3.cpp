@@ -517,7 +517,9 @@ class Snapper {
     std::vector<std::uint8_t> likely(option_.size(), 0);  // pass 1's refusals
     for (std::int32_t t = 0; t < static_cast<std::int32_t>(forest_.size()); ++t) {
       tet_done(2, t);
-      if (!forest_.is_leaf(t) || !nodes_.registered(t) || !build_menu(t, menu, count)) continue;
+      if (!forest_.is_leaf(t) || !nodes_.registered(t) || !options_.first_pass_window.holds(forest_, t) ||
+          !build_menu(t, menu, count))
+        continue;
       memo_leaf(t);
       for (int i = 0; i < 4; ++i) chosen[static_cast<std::size_t>(i)] = menu[static_cast<std::size_t>(i)][0];
       take_menu(t, menu, {1, 1, 1, 1});
@@ -530,7 +532,9 @@ class Snapper {
 
     for (std::int32_t t = 0; t < static_cast<std::int32_t>(forest_.size()); ++t) {
       tet_done(3, t);
-      if (!forest_.is_leaf(t) || !nodes_.registered(t) || !build_menu(t, menu, count)) continue;
+      if (!forest_.is_leaf(t) || !nodes_.registered(t) || !options_.second_pass_window.holds(forest_, t) ||
+          !build_menu(t, menu, count))
+        continue;
       ++nodes_.guarded_leaves;
       memo_leaf(t);
       // Pass 1's refusals leave the menus (their combinations cannot happen).

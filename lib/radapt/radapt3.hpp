@@ -38,6 +38,12 @@ namespace cisamr::radapt {
 // their vertices' options and pass-1 refusals (2), and those leaves' vertices' first
 // options (3). Final positions and masks of a node read leaves up to 3 cells away.
 inline constexpr int kReachCells3 = 3;
+// Its parts, for the windows of a partition (lib/parallel/README.md, "Windows"): the leaves
+// whose second-pass refusals decide a node lie within 1 cell of it, those whose first-pass
+// refusals they read within 2; options are built from leaves within kReachCells3.
+inline constexpr int kSecondPassCells3 = 1;
+inline constexpr int kFirstPassCells3 = 2;
+static_assert(kSecondPassCells3 < kFirstPassCells3 && kFirstPassCells3 < kReachCells3);
 
 struct Options3 {
   double alpha = 0.5;           // snap reach along axis edges, fraction of the edge length
@@ -47,6 +53,9 @@ struct Options3 {
   // The leaves worked on (a partition's: those within reach of its box); the others get no
   // nodes (Nodes3::registered is false) and refuse nothing. Default: every leaf.
   grid::LeafWindow window{};
+  // The guard's passes run on the leaves of `window` that these hold too (a partition's: the
+  // leaves whose refusals can reach the final positions read in its box; default: all).
+  grid::LeafWindow first_pass_window{}, second_pass_window{};
   Progress* progress = nullptr;  // advanced over the forest's tets, once per pass (may be null)
 };
 

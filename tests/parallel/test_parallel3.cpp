@@ -430,7 +430,9 @@ TEST(SamrReach3, BeyondTheFirstLayerTheForestIsTheWholeRunsForest) {
 // mesh is the whole run's for w = kKernelReach3 (the margin counts that much beyond SAMR's
 // first layer), and for the windows the partitions use (face swapping kSwapWindow3 =
 // kCompetitorCells3, r-adaptivity kRadaptWindow3 = that + 1 + radapt::kReachCells3). With
-// half a cell it may not be (so the comparison can fail). Boxes of a 3×3×2 split: box 13 has six inner
+// half a cell it may not be (so the comparison can fail). The partitions' windows run the
+// guard's passes on kFirstPassWindow3 and kSecondPassWindow3 (a forced window, as w, runs
+// them on all of r-adaptivity's). Boxes of a 3×3×2 split: box 13 has six inner
 // faces, the others meet the domain. Returns the boxes compared and how many differ with
 // half-cell windows.
 std::pair<int, int> compare_kernel_reach(const std::vector<testing::Case3>& cases, std::span<const int> boxes) {
@@ -438,7 +440,7 @@ std::pair<int, int> compare_kernel_reach(const std::vector<testing::Case3>& case
     double swap, radapt;
   };
   const Windows reach{kKernelReach3, kKernelReach3};
-  const Windows used{kSwapWindow3, kRadaptWindow3};
+  const Windows used{0, 0};  // derived: the guard's passes on narrower windows still
   const Windows half{0.5, 0.5};
   int compared = 0, half_differs = 0;
   for (const auto& c : cases) {
@@ -467,7 +469,8 @@ std::pair<int, int> compare_kernel_reach(const std::vector<testing::Case3>& case
           rule.swap_window_cells3 = w->swap;
           rule.radapt_window_cells3 = w->radapt;
           const GhostRegion3 region = ghost_region3(index, lattice, box, rule, levels);
-          ghost.radapt_reach = region.radapt_reach, ghost.swap_reach = region.swap_reach;
+          ghost = kernel_ghost(region);
+          ghost.sides = whole_domain;
         }
         return mesh_checksum3(pipeline::run<3>(oracle, lattice, box, ghost, c.options, 0, levels).mesh);
       };
@@ -590,18 +593,27 @@ TEST(Invariance3, TooSmallGhostBreaksIt) {
 // the ghost's outer part out (fewer leaves snapped than the forest holds) and mesh what the
 // whole ghost meshes. r-adaptivity's window holds the leaves whose cube starts within 6
 // cells of the box: the whole 7-cube ghost at level 0, 3.5 of 4 cubes at level 1, 1.75 of 3
-// at level 2.
+// at level 2; the guard's second pass runs on 4 of those cells, and meshes what it meshes on
+// all 6.
 TEST(Invariance3, WindowsLeaveOutTheGhostsOuterPart) {
   GhostRule whole_ghost;
   whole_ghost.radapt_window_cells3 = whole_ghost.swap_window_cells3 = -1;
+  GhostRule guard_on_all_rule;  // the same windows forced: the guard's passes on all of r-adaptivity's
+  guard_on_all_rule.radapt_window_cells3 = kRadaptWindow3;
+  guard_on_all_rule.swap_window_cells3 = kSwapWindow3;
   for (const auto& c : testing::invariance_cases3()) {
     if (c.name.rfind("packed-level", 0) != 0) continue;
     SCOPED_TRACE(c.name);
     const testing::RunOutcome3 windows = testing::run_parallel3(kSerial, c.scene, 8, {}, c.options);
     const testing::RunOutcome3 whole = testing::run_parallel3(kSerial, c.scene, 8, whole_ghost, c.options);
+    const testing::RunOutcome3 guard_on_all = testing::run_parallel3(kSerial, c.scene, 8, guard_on_all_rule, c.options);
     ASSERT_FALSE(windows.failed) << windows.error;
     ASSERT_FALSE(whole.failed) << whole.error;
+    ASSERT_FALSE(guard_on_all.failed) << guard_on_all.error;
     EXPECT_EQ(windows.checksum, whole.checksum);
+    EXPECT_EQ(guard_on_all.checksum, whole.checksum);
+    // The guard's second pass on 4 of r-adaptivity's 6 cells checks fewer leaves.
+    EXPECT_LT(windows.distributed.counters.guarded_leaves, guard_on_all.distributed.counters.guarded_leaves);
     const auto& w = windows.distributed.counters;
     EXPECT_EQ(w.leaves, whole.distributed.counters.leaves);  // the same forests
     EXPECT_EQ(whole.distributed.counters.snapping_leaves, w.leaves);
