@@ -537,7 +537,10 @@ class Snapper {
         continue;
       ++nodes_.guarded_leaves;
       memo_leaf(t);
-      // Pass 1's refusals leave the menus (their combinations cannot happen).
+      // Pass 1's refusals leave the menus (their combinations cannot happen). When every
+      // vertex keeps its first option, this leaf's pass 1 found their combination good
+      // (had it been bad, the leaf would have refused one of them): it is not checked again.
+      bool firsts_good = true;
       for (int i = 0; i < 4; ++i) {
         auto& m = menu[static_cast<std::size_t>(i)];
         int& n = count[static_cast<std::size_t>(i)];
@@ -545,20 +548,21 @@ class Snapper {
         for (int j = 0; j < n; ++j) {
           const std::int32_t o = m[static_cast<std::size_t>(j)];
           if (o < 0 || !likely[static_cast<std::size_t>(o)]) m[static_cast<std::size_t>(kept++)] = o;
+          else if (j == 0) firsts_good = false;
         }
         n = kept;
       }
       take_menu(t, menu, count);
-      nodes_.combinations += guard_leaf(menu, count);
+      nodes_.combinations += guard_leaf(menu, count, firsts_good);
     }
   }
 
-  // Pass 2 in one leaf whose menus take_menu has read: every combination, vertex 0's entry
-  // changing fastest, refusing (pick_refusal) until none is bad. Returns the combinations
-  // checked. Nested loops with the three outer vertices' share of acceptable() hoisted: most
+  // Pass 2 in one leaf whose menus take_menu has read: every combination (but the first when
+  // `firsts_good`: pass 1 found it good), vertex 0's entry changing fastest, refusing
+  // (pick_refusal) until none is bad. Returns the combinations checked. Nested loops with the three outer vertices' share of acceptable() hoisted: most
   // leaves refuse nothing, and the odometer's per-combination bookkeeping was a third of the
   // guard's instructions.
-  std::int64_t guard_leaf(const Menu& menu, const std::array<int, 4>& count) {
+  std::int64_t guard_leaf(const Menu& menu, const std::array<int, 4>& count, bool firsts_good) {
     // Bit j of gone_entries[i]: this leaf refused vertex i's j-th entry (each option is
     // one node's, and a node is one vertex of the leaf: one bit per refusal).
     std::array<std::uint8_t, 4> gone_entries{};
@@ -577,6 +581,10 @@ class Snapper {
           const PhaseMask rest_mask = e1.mask & e2.mask & e3.mask;
           const std::size_t rest_slot = e1.where << 3 | e2.where << 6 | e3.where << 9;
           for (at[0] = 0; at[0] < count[0]; ++at[0]) {
+            if (firsts_good) {  // the first combination (all entries 0), checked by pass 1
+              firsts_good = false;
+              continue;
+            }
             if (any_gone && (gone(0, at[0]) || gone(1, at[1]) || gone(2, at[2]) || gone(3, at[3]))) continue;
             ++checked;
             if (acceptable_with(entry[0][static_cast<std::size_t>(at[0])], rest_mask, rest_slot, at)) continue;
