@@ -540,7 +540,8 @@ class Snapper {
       // Pass 1's refusals leave the menus (their combinations cannot happen). When every
       // vertex keeps its first option, this leaf's pass 1 found their combination good
       // (had it been bad, the leaf would have refused one of them): it is not checked again.
-      bool firsts_good = true;
+      // (Only if pass 1 ran on this leaf: the windows nest in the kernel, not in every caller.)
+      bool firsts_good = options_.first_pass_window.holds(forest_, t);
       for (int i = 0; i < 4; ++i) {
         auto& m = menu[static_cast<std::size_t>(i)];
         int& n = count[static_cast<std::size_t>(i)];
