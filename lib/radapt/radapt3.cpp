@@ -560,9 +560,9 @@ class Snapper {
 
   // Pass 2 in one leaf whose menus take_menu has read: every combination (but the first when
   // `firsts_good`: pass 1 found it good), vertex 0's entry changing fastest, refusing
-  // (pick_refusal) until none is bad. Returns the combinations checked. Nested loops with the three outer vertices' share of acceptable() hoisted: most
-  // leaves refuse nothing, and the odometer's per-combination bookkeeping was a third of the
-  // guard's instructions.
+  // (pick_refusal) until none is bad. Returns the combinations checked. Nested loops with the
+  // three outer vertices' share of acceptable() hoisted: most leaves refuse nothing, and the
+  // odometer's per-combination bookkeeping was a third of the guard's instructions.
   std::int64_t guard_leaf(const Menu& menu, const std::array<int, 4>& count, bool firsts_good) {
     // Bit j of gone_entries[i]: this leaf refused vertex i's j-th entry (each option is
     // one node's, and a node is one vertex of the leaf: one bit per refusal).
@@ -581,11 +581,9 @@ class Snapper {
           const auto& e3 = entry[3][static_cast<std::size_t>(at[3])];
           const PhaseMask rest_mask = e1.mask & e2.mask & e3.mask;
           const std::size_t rest_slot = e1.where << 3 | e2.where << 6 | e3.where << 9;
-          for (at[0] = 0; at[0] < count[0]; ++at[0]) {
-            if (firsts_good) {  // the first combination (all entries 0), checked by pass 1
-              firsts_good = false;
-              continue;
-            }
+          // The first row starts past the first combination (all entries 0) when pass 1 found
+          // it good; every later row starts at 0.
+          for (at[0] = std::exchange(firsts_good, false) ? 1 : 0; at[0] < count[0]; ++at[0]) {
             if (any_gone && (gone(0, at[0]) || gone(1, at[1]) || gone(2, at[2]) || gone(3, at[3]))) continue;
             ++checked;
             if (acceptable_with(entry[0][static_cast<std::size_t>(at[0])], rest_mask, rest_slot, at)) continue;
