@@ -432,7 +432,7 @@ TEST(SamrReach3, BeyondTheFirstLayerTheForestIsTheWholeRunsForest) {
 // kCompetitorCells3, r-adaptivity kRadaptWindow3 = that + 1 + radapt::kReachCells3). With
 // half a cell it may not be (so the comparison can fail). The partitions' windows run the
 // guard's passes on kFirstPassWindow3 and kSecondPassWindow3 (a forced window, as w, runs
-// them on all of r-adaptivity's; with both passes on the box alone it may differ. Boxes of a
+// them on all of r-adaptivity's); with both passes on the box alone it may differ. Boxes of a
 // 3×3×2 split: box 13 has six inner faces, the others meet the domain.
 struct KernelReachCounts {
   int compared = 0;
