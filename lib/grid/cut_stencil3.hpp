@@ -101,30 +101,50 @@ struct Builder {
 
 inline std::uint8_t cut(int a, int b) { return static_cast<std::uint8_t>(tet::midpoint(tet::edge_of(a, b))); }
 
-// Reference points of a tet with integer vertices v (lattice points): 2·v_i, and the edge
-// midpoints v_i + v_j standing for the cut points.
-inline std::array<std::array<std::int64_t, 3>, 10> reference(const std::array<LatticePoint3, 4>& v) {
-  std::array<std::array<std::int64_t, 3>, 10> r{};
-  for (int i = 0; i < 4; ++i)
-    for (int d = 0; d < 3; ++d) r[static_cast<std::size_t>(i)][static_cast<std::size_t>(d)] = 2 * v[static_cast<std::size_t>(i)][static_cast<std::size_t>(d)];
-  for (int e = 0; e < 6; ++e)
-    for (int d = 0; d < 3; ++d)
-      r[static_cast<std::size_t>(tet::midpoint(e))][static_cast<std::size_t>(d)] =
-          v[tet::kEdges[e][0]][static_cast<std::size_t>(d)] + v[tet::kEdges[e][1]][static_cast<std::size_t>(d)];
-  return r;
+// Orientation of a tet of local points (0-3 a tet's vertices, 4 + e the midpoint of its
+// edge e) in the reference corner tet: bit ((a·10 + b)·10 + c)·10 + d set when (a, b, c, d)
+// is negative there. The local points of any tet with integer vertices (edge midpoints
+// standing for the cut points) are an affine image of the reference's, so a sub-tet's
+// orientation there is this one times the tet's own: one table lookup per sub-tet instead of
+// an integer determinant on points rebuilt per split (the snapping guard splits millions).
+inline constexpr auto kNegativeInReference = [] {
+  constexpr auto r = tet::reference_points(tet::Kind::corner);
+  std::array<std::uint64_t, (10000 + 63) / 64> bits{};
+  for (int a = 0; a < 10; ++a)
+    for (int b = 0; b < 10; ++b)
+      for (int c = 0; c < 10; ++c)
+        for (int d = 0; d < 10; ++d)
+          if (tet::orient(r[static_cast<std::size_t>(a)], r[static_cast<std::size_t>(b)], r[static_cast<std::size_t>(c)],
+                          r[static_cast<std::size_t>(d)]) < 0) {
+            const int at = ((a * 10 + b) * 10 + c) * 10 + d;
+            bits[static_cast<std::size_t>(at / 64)] |= std::uint64_t{1} << (at % 64);
+          }
+  return bits;
+}();
+
+inline bool negative_in_reference(const LocalTet& t) {
+  const int at = ((t[0] * 10 + t[1]) * 10 + t[2]) * 10 + t[3];
+  return (kNegativeInReference[static_cast<std::size_t>(at / 64)] >> (at % 64)) & 1;
 }
 
-// Orients every tet positively with respect to the undeformed tet (cut points at edge
+inline bool flat_in_reference(const LocalTet& t) {
+  constexpr auto r = tet::reference_points(tet::Kind::corner);
+  return tet::orient(r[t[0]], r[t[1]], r[t[2]], r[t[3]]) == 0;
+}
+
+// Orients every tet positively with respect to the undeformed tet `v` (cut points at edge
 // midpoints): the combinatorial orientation, which a deformed tet keeps unless a sub-tet
 // inverts (the guard refuses such outcomes).
-inline void orient(const std::array<std::array<std::int64_t, 3>, 10>& ref, Split& s) {
+inline void orient(const std::array<LatticePoint3, 4>& v, Split& s) {
+  const std::int64_t own = tet::orient(v[0], v[1], v[2], v[3]);
+  CISAMR_DEBUG_CHECK(own != 0, "cut_stencil3: degenerate tet");
+  const bool flip = own < 0;
   for (int i = 0; i < s.count; ++i) {
     LocalTet& t = s.tet[static_cast<std::size_t>(i)];
-    const std::int64_t o = tet::orient(ref[t[0]], ref[t[1]], ref[t[2]], ref[t[3]]);
     // The stencils are fixed tables (tests/grid3 splits every sign pattern) and this runs for
     // every combination the snapping guard tries: a debug check.
-    CISAMR_DEBUG_CHECK(o != 0, "cut_stencil3: degenerate stencil tet");
-    if (o < 0) std::swap(t[2], t[3]);
+    CISAMR_DEBUG_CHECK(!flat_in_reference(t), "cut_stencil3: degenerate stencil tet");
+    if (negative_in_reference(t) != flip) std::swap(t[2], t[3]);
   }
 }
 
@@ -134,7 +154,6 @@ inline void orient(const std::array<std::array<std::int64_t, 3>, 10>& ref, Split
 // orient the sub-tets.
 inline Split split(const std::array<LatticePoint3, 4>& lattice, const std::array<int, 4>& sign,
                    const std::array<PointId, 10>& id, const std::array<Vec3, 10>& p) {
-  const auto ref = detail::reference(lattice);
   using detail::cut;
   std::array<std::uint8_t, 4> plus{}, minus{}, zero{};
   int np = 0, nm = 0, nz = 0;
@@ -199,14 +218,14 @@ inline Split split(const std::array<LatticePoint3, 4>& lattice, const std::array
       detail::Builder trial;
       if (!trial.prism({a, ac, ad}, {bb, bc, bd}, {d_abc, di, d_abd}, plus_side)) continue;
       if (!trial.prism({c, ac, bc}, {d, ad, bd}, {d_acd, di, d_bcd}, minus_side)) continue;
-      detail::orient(ref, trial.out);
+      detail::orient(lattice, trial.out);
       best = trial.out;
       break;
     }
     CISAMR_CHECK(best.count > 0, "cut_stencil3: no acyclic split of a (+,+,-,-) leaf");
     return best;
   }
-  detail::orient(ref, b.out);
+  detail::orient(lattice, b.out);
   return b.out;
 }
 

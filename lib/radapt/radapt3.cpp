@@ -49,14 +49,16 @@ struct Candidate {
   LatticeKey3 other = 0;   // the edge's other end: a fixed tie-break
 };
 
-// Crossings of one phase-changing edge nearest each end, for snap candidates.
-// The crossings of a phase-changing edge that build_options needs besides its cut. The
-// ends' frame points and positions are not kept (they were two thirds of the record, the
-// largest table alive at the mesher's peak): build_options derives them from the cut's keys.
+// What build_options needs of a phase-changing edge besides its cut: its ends' node ids
+// (looking them up by the cut's keys was two fifths of build_options' time, cache misses in
+// the registry) and the crossings nearest each end, for snap candidates. The ends' frame
+// points and positions are not kept (they were two thirds of the record, the largest table
+// alive at the mesher's peak): build_options derives them from the cut's keys.
 struct EdgeEnds {
-  bool any = false;
+  std::int32_t lo = -1, hi = -1;  // nodes at the cut's keys lo and hi
   double t_front = 0, t_back = 0;  // along lo → hi
-  PhaseMask mask_front = 0, mask_back = 0;
+  PhaseMask mask_front = 0, mask_back = 0;  // 0: no crossing
+  bool any() const { return mask_front != 0; }
 };
 
 // What the guard reads of a vertex's menu entry in the leaf being guarded (take_menu): its
@@ -262,6 +264,7 @@ class Snapper {
   // frame.a and frame.b, lo's key the smaller there).
   void add_edge(std::int32_t lo, std::int32_t hi, const EdgeFrame& frame, std::int32_t leaf) {
     EdgeEnds ends;
+    ends.lo = lo, ends.hi = hi;
     const Vec3 pa = frame_position(lo, frame.a), pb = frame_position(hi, frame.b);
     if (frame.on_periodic_plane(lattice_)) {  // seen from two frames: its own candidates
       oracle_.candidates(segment_box(pa, pb), plane_candidates_);
@@ -296,7 +299,6 @@ class Snapper {
       for (int d = 0; d < 3; ++d) cut.point[d] = pa[d] + chosen->t * (pb[d] - pa[d]);
       cut.mask = (PhaseMask{1} << chosen->from_phase) | (PhaseMask{1} << chosen->to_phase);
       cut.found = true;
-      ends.any = true;
       const auto& f = crossings_.front();
       const auto& l = crossings_.back();
       ends.t_front = f.t, ends.mask_front = (PhaseMask{1} << f.from_phase) | (PhaseMask{1} << f.to_phase);
@@ -345,15 +347,15 @@ class Snapper {
     for (std::size_t e = 0; e < nodes_.edges.size(); ++e) {
       const EdgeCut& cut = nodes_.edges[e];
       const EdgeEnds& ends = ends_[e];
-      const std::int32_t lo = nodes_.id(canonical_key(lattice_, cut.lo)), hi = nodes_.id(canonical_key(lattice_, cut.hi));
+      const std::int32_t lo = ends.lo, hi = ends.hi;
       const EdgeGeometry geo = edge_geometry(cut, lo, hi);
       for (int side = 0; side < 2; ++side) {
         const std::int32_t v = side == 0 ? lo : hi, w = side == 0 ? hi : lo;
         const auto uv = static_cast<std::size_t>(v), uw = static_cast<std::size_t>(w);
         collapse_mask_[uv] |= nodes_.mask[uw];
         {
-          const double to_crossing = ends.any ? (side == 0 ? ends.t_front : 1.0 - ends.t_back) * geo.length : geo.length;
-          const PhaseMask beyond = ends.any ? (side == 0 ? ends.mask_front : ends.mask_back) & ~nodes_.mask[uv] : 0;
+          const double to_crossing = ends.any() ? (side == 0 ? ends.t_front : 1.0 - ends.t_back) * geo.length : geo.length;
+          const PhaseMask beyond = ends.any() ? (side == 0 ? ends.mask_front : ends.mask_back) & ~nodes_.mask[uv] : 0;
           for (PhaseMask rest = nodes_.mask[uw]; rest != 0; rest &= rest - 1) {
             const int phase = std::countr_zero(rest);
             const double d = (beyond >> phase) & 1 ? to_crossing : geo.length;
@@ -364,7 +366,7 @@ class Snapper {
             else reach_[static_cast<std::size_t>(at)] = std::min(reach_[static_cast<std::size_t>(at)], d);
           }
         }
-        if (!ends.any) continue;
+        if (!ends.any()) continue;
         const double fraction = side == 0 ? ends.t_front : 1.0 - ends.t_back;
         nearest[uv] = std::min(nearest[uv], fraction);
         if (single_phase(nodes_.mask[uv]) < 0) continue;  // already on an interface
@@ -420,7 +422,7 @@ class Snapper {
   Option snap_option(const Candidate& c) const {
     const EdgeCut& cut = nodes_.edges[static_cast<std::size_t>(c.edge)];
     const EdgeEnds& ends = ends_[static_cast<std::size_t>(c.edge)];
-    const std::int32_t lo = nodes_.id(canonical_key(lattice_, cut.lo)), hi = nodes_.id(canonical_key(lattice_, cut.hi));
+    const std::int32_t lo = ends.lo, hi = ends.hi;
     const EdgeGeometry geo = edge_geometry(cut, lo, hi);
     const bool front = c.node == lo;
     const double t = front ? ends.t_front : ends.t_back;

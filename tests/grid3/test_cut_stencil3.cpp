@@ -172,6 +172,50 @@ TEST(CutStencil3, EverySignPatternFillsTheTet) {
   }
 }
 
+// split() orients its sub-tets from a table of the reference tet's orientations times the
+// tet's own: for every tet of a cube, given in its order and with two vertices swapped
+// (negatively oriented), every sign pattern's sub-tets are positive by the exact
+// determinant of their lattice points (edge midpoints for the cut points).
+TEST(CutStencil3, SubTetsArePositiveForEitherOrientationOfTheTet) {
+  int checked = 0;
+  for (std::uint8_t local = 0; local < 5; ++local)
+    for (bool swapped : {false, true}) {
+      auto v = tet_vertices(TetCode{{0, 0, 0}, local});
+      if (swapped) std::swap(v[2], v[3]);
+      std::array<LatticePoint3, 10> twice{};  // 2·v and the edge midpoints, exactly
+      for (int a = 0; a < 4; ++a)
+        for (int d = 0; d < 3; ++d) twice[static_cast<std::size_t>(a)][static_cast<std::size_t>(d)] = 2 * v[static_cast<std::size_t>(a)][static_cast<std::size_t>(d)];
+      for (int e = 0; e < 6; ++e)
+        for (int d = 0; d < 3; ++d)
+          twice[static_cast<std::size_t>(tet::midpoint(e))][static_cast<std::size_t>(d)] =
+              v[tet::kEdges[e][0]][static_cast<std::size_t>(d)] + v[tet::kEdges[e][1]][static_cast<std::size_t>(d)];
+      std::array<PointId, 10> id{};
+      std::array<Vec3, 10> p{};
+      for (std::size_t q = 0; q < 10; ++q) {
+        id[q] = {static_cast<LatticeKey3>(q), static_cast<LatticeKey3>(q)};
+        for (int d = 0; d < 3; ++d) p[q][static_cast<std::size_t>(d)] = 0.5 * static_cast<double>(twice[q][static_cast<std::size_t>(d)]);
+      }
+      for (int pattern = 0; pattern < 81; ++pattern) {
+        std::array<int, 4> sign{};
+        int x = pattern, plus = 0, minus = 0;
+        for (int a = 0; a < 4; ++a, x /= 3) {
+          sign[static_cast<std::size_t>(a)] = x % 3 - 1;
+          plus += sign[static_cast<std::size_t>(a)] > 0, minus += sign[static_cast<std::size_t>(a)] < 0;
+        }
+        if (plus == 0 || minus == 0) continue;
+        const auto s = stencil3::split(v, sign, id, p);
+        ASSERT_GT(s.count, 0);
+        for (int t = 0; t < s.count; ++t) {
+          const auto& l = s.tet[static_cast<std::size_t>(t)];
+          ASSERT_GT(tet::orient(twice[l[0]], twice[l[1]], twice[l[2]], twice[l[3]]), 0)
+              << "tet " << int(local) << (swapped ? " swapped" : "") << ", pattern " << pattern << ", sub-tet " << t;
+          ++checked;
+        }
+      }
+    }
+  EXPECT_GT(checked, 1000);
+}
+
 // The outcome wrapper: kept when the masks share a phase, split with cut points asked for
 // exactly the strictly cut edges, unsplittable with three phases.
 TEST(CutStencil3, OutcomeClassifiesAndAsksForStrictCutsOnly) {
