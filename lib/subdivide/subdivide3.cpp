@@ -158,18 +158,20 @@ class Subdivider3 {
     const auto& ids = nodes_.tet_nodes[static_cast<std::size_t>(t)];
     const auto v = forest_.fine_vertices(t);
     const int level = forest_.tet(t).level;
-    // Hanging midpoints: edge midpoints that are nodes (vertices of finer leaves).
-    // Points 0-9 by their frame points (`frame`) and canonical keys (`keys`, for node
-    // look-ups and the key rules, so both sides of a periodic plane decide alike).
-    unsigned hanging = 0;
-    std::array<std::int32_t, 6> mid_id{};
-    std::array<LatticeKey3, 10> keys{};
-    std::array<grid::LatticePoint3, 10> frame{};
-    for (int i = 0; i < 4; ++i) {
-      frame[static_cast<std::size_t>(i)] = v[i];
-      keys[static_cast<std::size_t>(i)] = grid::key3(lattice().canonical_point(v[i]));
-    }
-    if (level < forest_.lattice().max_level && nodes_.may_hang(ids, level))
+    const std::array<std::int32_t, 4> vid{ids[0], ids[1], ids[2], ids[3]};
+    // Hanging midpoints: edge midpoints that are nodes (vertices of finer leaves). Points 0-9
+    // by their frame points (`frame`) and canonical keys (`keys`, for node look-ups and the
+    // key rules, so both sides of a periodic plane decide alike): all ten set here, and only
+    // for a leaf that may hang (most leaves go on to tetrahedron(), which needs neither).
+    if (level < forest_.lattice().max_level && nodes_.may_hang(ids, level)) {
+      unsigned hanging = 0;
+      std::array<std::int32_t, 6> mid_id;
+      std::array<LatticeKey3, 10> keys;
+      std::array<grid::LatticePoint3, 10> frame;
+      for (int i = 0; i < 4; ++i) {
+        frame[static_cast<std::size_t>(i)] = v[i];
+        keys[static_cast<std::size_t>(i)] = grid::key3(lattice().canonical_point(v[i]));
+      }
       for (int e = 0; e < 6; ++e) {
         const auto& a = v[tet::kEdges[e][0]];
         const auto& b = v[tet::kEdges[e][1]];
@@ -180,10 +182,10 @@ class Subdivider3 {
         mid_id[static_cast<std::size_t>(e)] = nodes_.id(k);
         if (mid_id[static_cast<std::size_t>(e)] >= 0) hanging |= 1u << e;
       }
-    const std::array<std::int32_t, 4> vid{ids[0], ids[1], ids[2], ids[3]};
-    if (hanging) {
-      close(t, vid, keys, frame, mid_id, hanging);
-      return;
+      if (hanging) {
+        close(t, vid, keys, frame, mid_id, hanging);
+        return;
+      }
     }
     tetrahedron(vid, v, nodes_.edges_of(t), Origin::kept);
   }
