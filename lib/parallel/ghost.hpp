@@ -50,16 +50,21 @@ inline constexpr double kKernelReach3 =                          // cells of the
 
 // 3D windows of the later stages inside that ghost, in cells of the deciding level (README.md,
 // "Ghost region (3D)"): the forest is needed on the whole ghost for SAMR's sake, but a
-// decision in the box reads face-swap candidates of corner tets at most kCompetitorCells3
-// cells out (its window), which read the cubes one cell beyond them, whose final node
-// positions read leaves radapt::kReachCells3 further (r-adaptivity's window). Of that window
-// the guard's second pass needs the leaves within radapt::kSecondPassCells3 of those
-// positions, its first pass those within kFirstPassCells3. No safety on top: KernelReach3
-// checks these windows directly (2 safety cells each before).
-inline constexpr int kSwapWindow3 = faceswap::kCompetitorCells3;
-inline constexpr int kRadaptWindow3 = kSwapWindow3 + 1 + radapt::kReachCells3;
-inline constexpr int kFirstPassWindow3 = kSwapWindow3 + 1 + radapt::kFirstPassCells3;
-inline constexpr int kSecondPassWindow3 = kSwapWindow3 + 1 + radapt::kSecondPassCells3;
+// decision in the box reads the final positions and masks of nodes at most
+// kCompetitorCells3 cells out (the far corners of a competing face swap's cubes: a swap of
+// box cube C with D beats every candidate sharing C or D, and a competitor (D, Y) reads D and
+// Y only). Such a node's position is decided by the guard's second-pass refusals of the leaves
+// around it (radapt::kSecondPassCells3), their vertices' first-pass refusals
+// (kFirstPassCells3) and those leaves' vertices' options (radapt::kReachCells3). A window
+// holds the leaves that *start* within it (grid::LeafWindow), and a leaf of the deciding
+// level that reaches d cells out starts d − 1 out (finer leaves' chains are shorter): hence
+// the − 1. Face swapping looks for candidates from the corner tets of the competitors' cubes.
+// No safety on top: KernelReach3 checks these windows directly.
+inline constexpr int kSwapWindow3 = faceswap::kCompetitorCells3 - 1;
+inline constexpr int kRadaptWindow3 = faceswap::kCompetitorCells3 + radapt::kReachCells3 - 1;
+inline constexpr int kFirstPassWindow3 = faceswap::kCompetitorCells3 + radapt::kFirstPassCells3 - 1;
+inline constexpr int kSecondPassWindow3 = faceswap::kCompetitorCells3 + radapt::kSecondPassCells3 - 1;
+static_assert(kSwapWindow3 == 1 && kRadaptWindow3 == 4 && kFirstPassWindow3 == 3 && kSecondPassWindow3 == 2);
 
 // Coarse cubes of ghost a 3D box needs when the coarsest effective level among the
 // inclusions near it is `level` and the lattice's finest is `max_level`: the least whole
@@ -93,7 +98,7 @@ struct GhostRule {
   // follows a forced r-adaptivity's (swap_window3_cells()).
   double radapt_window_cells3 = 0, swap_window_cells3 = 0;
   // Face swapping's window in use when r-adaptivity's is forced and its own is not: that
-  // less the cells between them (kRadaptWindow3 − kSwapWindow3), at least ½; -1 with -1.
+  // less the cells between them (kRadaptWindow3 − kSwapWindow3 = 3), at least ½; -1 with -1.
   double swap_window3_cells() const {
     if (swap_window_cells3 != 0 || radapt_window_cells3 == 0) return swap_window_cells3;
     if (radapt_window_cells3 < 0) return -1;
