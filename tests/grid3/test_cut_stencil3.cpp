@@ -119,6 +119,17 @@ TEST(CutStencil3, RandomBlocksSplitConformingly) {
   EXPECT_GT(splits, 10000);  // every sign pattern occurs many times
 }
 
+// The signs of sign pattern `pattern` (base 3, vertex 0 the lowest digit: -1, 0, +1) into
+// `sign`; false when the tet is not cut (no vertex strictly on one of the two sides).
+bool cut_signs(int pattern, std::array<int, 4>& sign) {
+  int plus = 0, minus = 0;
+  for (int a = 0, x = pattern; a < 4; ++a, x /= 3) {
+    sign[static_cast<std::size_t>(a)] = x % 3 - 1;
+    plus += sign[static_cast<std::size_t>(a)] > 0, minus += sign[static_cast<std::size_t>(a)] < 0;
+  }
+  return plus > 0 && minus > 0;
+}
+
 // Every sign pattern of a lone tet of either kind, with every combination of cut fractions
 // in {1, 4, 7}/8: positive sub-tets that fill the tet, each on one side.
 TEST(CutStencil3, EverySignPatternFillsTheTet) {
@@ -126,12 +137,7 @@ TEST(CutStencil3, EverySignPatternFillsTheTet) {
     const auto v = tet_vertices(TetCode{{0, 0, 0}, local});
     for (int pattern = 0; pattern < 81; ++pattern) {
       std::array<int, 4> sign{};
-      int x = pattern, plus = 0, minus = 0;
-      for (int a = 0; a < 4; ++a, x /= 3) {
-        sign[static_cast<std::size_t>(a)] = x % 3 - 1;
-        plus += sign[static_cast<std::size_t>(a)] > 0, minus += sign[static_cast<std::size_t>(a)] < 0;
-      }
-      if (plus == 0 || minus == 0) continue;
+      if (!cut_signs(pattern, sign)) continue;
       for (int combo = 0; combo < 729; ++combo) {
         std::array<PointId, 10> id{};
         std::array<LatticePoint3, 10> exact{};
@@ -158,8 +164,11 @@ TEST(CutStencil3, EverySignPatternFillsTheTet) {
         for (int t = 0; t < s.count; ++t) {
           const auto& l = s.tet[static_cast<std::size_t>(t)];
           mesh.add(exact[l[0]], exact[l[1]], exact[l[2]], exact[l[3]]);
-          for (std::uint8_t q : l)
-            if (q < 4) ASSERT_FALSE(sign[q] != 0 && sign[q] != s.side[static_cast<std::size_t>(t)]) << "pattern " << pattern;
+          for (std::uint8_t q : l) {
+            if (q < 4) {
+              ASSERT_FALSE(sign[q] != 0 && sign[q] != s.side[static_cast<std::size_t>(t)]) << "pattern " << pattern;
+            }
+          }
         }
         std::int64_t volume6 = 0;
         for (std::size_t t = 0; t < mesh.tets.size(); ++t) {
@@ -197,12 +206,7 @@ TEST(CutStencil3, SubTetsArePositiveForEitherOrientationOfTheTet) {
       }
       for (int pattern = 0; pattern < 81; ++pattern) {
         std::array<int, 4> sign{};
-        int x = pattern, plus = 0, minus = 0;
-        for (int a = 0; a < 4; ++a, x /= 3) {
-          sign[static_cast<std::size_t>(a)] = x % 3 - 1;
-          plus += sign[static_cast<std::size_t>(a)] > 0, minus += sign[static_cast<std::size_t>(a)] < 0;
-        }
-        if (plus == 0 || minus == 0) continue;
+        if (!cut_signs(pattern, sign)) continue;
         const auto s = stencil3::split(v, sign, id, p);
         ASSERT_GT(s.count, 0);
         for (int t = 0; t < s.count; ++t) {
