@@ -150,8 +150,8 @@ inline void orient(const std::array<LatticePoint3, 4>& v, Split& s) {
 
 }  // namespace detail
 
-// `lattice`: the tet's vertices as integer lattice points (positively oriented), which
-// orient the sub-tets.
+// `lattice`: the tet's vertices as integer lattice points, whose orientation (the forest's
+// are positive) the sub-tets take.
 inline Split split(const std::array<LatticePoint3, 4>& lattice, const std::array<int, 4>& sign,
                    const std::array<PointId, 10>& id, const std::array<Vec3, 10>& p) {
   using detail::cut;
