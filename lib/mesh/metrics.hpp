@@ -4,6 +4,7 @@
 //   tetrahedron  AR = l_max / (2·√6·r_in),  r_in = 3·Volume / (sum of face areas)
 // 1 for the equilateral triangle / regular tetrahedron; +inf for a degenerate element.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -94,6 +95,49 @@ inline bool positive_within(const Vec3& a, const Vec3& b, const Vec3& c, const V
   if (l2 * (n0 + n1 + n2 + n3) <= limit * limit * (1 - 1e-6)) return true;
   const double faces = 0.5 * (std::sqrt(n0) + std::sqrt(n1) + std::sqrt(n2) + std::sqrt(n3));
   return std::sqrt(l2) * faces <= limit;
+}
+
+// positive_within for two tetrahedra at once, (a0, b0, c0, d0) and (a1, b1, c1, d1): the
+// same operations in the same order on the two lanes of a vector of two doubles (IEEE
+// arithmetic lane by lane, no fused multiply-add on the baseline target), so each verdict
+// is positive_within's bit for bit; the square roots of the rare exact test per lane. The
+// snapping guard evaluates a split's sub-tets in pairs with it.
+inline std::array<bool, 2> positive_within_pair(const std::array<const Vec3*, 4>& t0, const std::array<const Vec3*, 4>& t1,
+                                                double bound) {
+  using Pair = double __attribute__((vector_size(16)));
+  const auto lane = [&](int point, int d) { return Pair{(*t0[static_cast<std::size_t>(point)])[static_cast<std::size_t>(d)], (*t1[static_cast<std::size_t>(point)])[static_cast<std::size_t>(d)]}; };
+  const Pair a[3] = {lane(0, 0), lane(0, 1), lane(0, 2)}, b[3] = {lane(1, 0), lane(1, 1), lane(1, 2)},
+             c[3] = {lane(2, 0), lane(2, 1), lane(2, 2)}, d[3] = {lane(3, 0), lane(3, 1), lane(3, 2)};
+  const Pair u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+  const Pair v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+  const Pair w[3] = {d[0] - a[0], d[1] - a[1], d[2] - a[2]};
+  const Pair six_volume = u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0]) +
+                          u[2] * (v[0] * w[1] - v[1] * w[0]);
+  const auto norm2_cross = [](const Pair* x, const Pair* y) {
+    const Pair p = x[1] * y[2] - x[2] * y[1], q = x[2] * y[0] - x[0] * y[2], r = x[0] * y[1] - x[1] * y[0];
+    return p * p + q * q + r * r;
+  };
+  const Pair bc[3] = {c[0] - b[0], c[1] - b[1], c[2] - b[2]};
+  const Pair bd[3] = {d[0] - b[0], d[1] - b[1], d[2] - b[2]};
+  const Pair cd[3] = {d[0] - c[0], d[1] - c[1], d[2] - c[2]};
+  const Pair n0 = norm2_cross(u, v), n1 = norm2_cross(u, w), n2 = norm2_cross(v, w), n3 = norm2_cross(bc, bd);
+  const auto sq = [](const Pair* x) { return x[0] * x[0] + x[1] * x[1] + x[2] * x[2]; };
+  // std::max's order of comparisons, lane by lane (ties and NaN-free inputs give the same value).
+  const auto larger = [](Pair x, Pair y) { return x < y ? y : x; };
+  const Pair l2 = larger(larger(larger(larger(larger(sq(u), sq(v)), sq(w)), sq(bc)), sq(bd)), sq(cd));
+  const Pair limit = bound * (1 - 1e-9) * std::sqrt(6.0) * six_volume;
+  const Pair lhs = l2 * (n0 + n1 + n2 + n3), rhs = limit * limit * (1 - 1e-6);
+  std::array<bool, 2> good{};
+  for (int k = 0; k < 2; ++k) {
+    if (!(six_volume[k] > 0)) continue;
+    if (lhs[k] <= rhs[k]) {
+      good[static_cast<std::size_t>(k)] = true;
+      continue;
+    }
+    const double faces = 0.5 * (std::sqrt(n0[k]) + std::sqrt(n1[k]) + std::sqrt(n2[k]) + std::sqrt(n3[k]));
+    good[static_cast<std::size_t>(k)] = std::sqrt(l2[k]) * faces <= limit[k];
+  }
+  return good;
 }
 
 // Aspect ratio of cell c of a mesh.

@@ -718,12 +718,41 @@ class Snapper {
       leaf_.pair[static_cast<std::size_t>(pattern)] = all;
     }
     const int phase_plus = std::countr_zero(plus), phase_minus = std::countr_zero(minus);
+    // The sub-tets whose verdicts this leaf has not seen yet are evaluated two at a time (most
+    // combinations bring two to four); a memoised bad one decides as well, once every slot
+    // this call claimed holds its verdict.
+    std::array<std::size_t, grid::stencil3::kMaxSplitTets> fresh_slot{};
+    std::array<const grid::stencil3::LocalTet*, grid::stencil3::kMaxSplitTets> fresh_tet{};
+    int fresh = 0;
+    bool all_good = true;
     for (int k = 0; k < cached.count; ++k) {
       if (is_void(cached.side[static_cast<std::size_t>(k)] > 0 ? phase_plus : phase_minus)) continue;
       const auto& s = cached.tet[static_cast<std::size_t>(k)];
-      if (!memo_good(key(s[0], s[1], s[2], s[3]), p[s[0]], p[s[1]], p[s[2]], p[s[3]])) return false;
+      bool known = false;
+      const std::size_t slot = memo_slot(key(s[0], s[1], s[2], s[3]), known);
+      if (known) {
+        all_good = all_good && memo_value_[slot] != 0;
+        continue;
+      }
+      fresh_slot[static_cast<std::size_t>(fresh)] = slot, fresh_tet[static_cast<std::size_t>(fresh)] = &s, ++fresh;
     }
-    return true;
+    const auto points = [&](const grid::stencil3::LocalTet& t) {
+      return std::array<const Vec3*, 4>{&p[t[0]], &p[t[1]], &p[t[2]], &p[t[3]]};
+    };
+    for (int i = 0; i < fresh; i += 2) {
+      const auto& s = *fresh_tet[static_cast<std::size_t>(i)];
+      std::array<bool, 2> verdict{};
+      if (i + 1 < fresh)
+        verdict = mesh::positive_within_pair(points(s), points(*fresh_tet[static_cast<std::size_t>(i) + 1]), options_.bound);
+      else
+        verdict[0] = good(p[s[0]], p[s[1]], p[s[2]], p[s[3]]);
+      for (int j = 0; j < 2 && i + j < fresh; ++j) {
+        const std::size_t slot = fresh_slot[static_cast<std::size_t>(i + j)];
+        if (slot < kMemoSize) memo_value_[slot] = verdict[static_cast<std::size_t>(j)] ? 1 : 0;
+        all_good = all_good && verdict[static_cast<std::size_t>(j)];
+      }
+    }
+    return all_good;
   }
 
   // The leaf being guarded: its lattice points, point identities and cut points (points
@@ -771,18 +800,25 @@ class Snapper {
       leaf_.id[static_cast<std::size_t>(tet::midpoint(e))] = {cut.lo, cut.hi};
     }
   }
-  bool memo_good(std::uint32_t key, const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
+  // The memo's slot of `key` in the current leaf: `known` when it holds the key's verdict,
+  // else claimed for it (the caller stores the verdict before the next look-up);
+  // kMemoSize when the table is full (never with four vertices of four options).
+  std::size_t memo_slot(std::uint32_t key, bool& known) {
     std::size_t slot = (key * 2654435761u) >> 23 & (kMemoSize - 1);
     for (std::size_t probe = 0; probe < kMemoSize; ++probe, slot = (slot + 1) & (kMemoSize - 1)) {
       if (memo_stamp_[slot] != memo_generation_) {
         memo_stamp_[slot] = memo_generation_;
         memo_key_[slot] = key;
-        memo_value_[slot] = good(a, b, c, d) ? 1 : 0;
-        return memo_value_[slot] != 0;
+        known = false;
+        return slot;
       }
-      if (memo_key_[slot] == key) return memo_value_[slot] != 0;
+      if (memo_key_[slot] == key) {
+        known = true;
+        return slot;
+      }
     }
-    return good(a, b, c, d);  // the table is full (never with four vertices of four options)
+    known = false;
+    return kMemoSize;
   }
 
   bool good(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) const {

@@ -236,5 +236,40 @@ TEST(PositiveWithin, SameVerdictAsTheFullTest) {
   EXPECT_GT(refused, 1000);
 }
 
+// The guard evaluates a split's sub-tets two at a time: each lane's verdict must be the
+// scalar test's, bit for bit, also right at the bound (a tet's own ratio as the bound, up to
+// round-off either way), for degenerate and negatively oriented tets, and whichever lane a
+// tet is in.
+TEST(PositiveWithin, PairsGiveEachTetsVerdict) {
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> coordinate(-1.0, 1.0);
+  int accepted = 0, refused = 0;
+  for (int trial = 0; trial < 20000; ++trial) {
+    std::array<std::array<Vec3, 4>, 2> t;
+    for (auto& p : t)
+      for (Vec3& x : p)
+        for (int d = 0; d < 3; ++d) x[d] = coordinate(rng);
+    if (trial % 11 == 0) t[1][3] = t[1][0];  // degenerate
+    const auto points = [](const std::array<Vec3, 4>& p) { return std::array<const Vec3*, 4>{&p[0], &p[1], &p[2], &p[3]}; };
+    for (int near = 0; near < 2; ++near) {
+      const auto& p = t[static_cast<std::size_t>(near)];
+      const double ratio = mesh::aspect_ratio(p[0], p[1], p[2], p[3]);
+      for (const double bound : {ratio * (1 + 1e-9 * (trial % 3 - 1)), 2.0, 5.0}) {
+        const auto pair = mesh::positive_within_pair(points(t[0]), points(t[1]), bound);
+        const auto swapped = mesh::positive_within_pair(points(t[1]), points(t[0]), bound);
+        for (int k = 0; k < 2; ++k) {
+          const auto& q = t[static_cast<std::size_t>(k)];
+          const bool expected = mesh::positive_within(q[0], q[1], q[2], q[3], bound);
+          ASSERT_EQ(pair[static_cast<std::size_t>(k)], expected) << "trial " << trial << ", lane " << k;
+          ASSERT_EQ(swapped[static_cast<std::size_t>(1 - k)], expected) << "trial " << trial << ", lane " << 1 - k;
+          (expected ? accepted : refused) += 1;
+        }
+      }
+    }
+  }
+  EXPECT_GT(accepted, 10000);
+  EXPECT_GT(refused, 10000);
+}
+
 }  // namespace
 }  // namespace cisamr::quality
