@@ -67,66 +67,88 @@ inline double aspect_ratio(const Vec3& a, const Vec3& b, const Vec3& c, const Ve
                                      triangle_area_3d(a, b, c));
 }
 
+namespace detail {
+
+// positive_within's arithmetic, written once for T = double and for a vector of two doubles
+// (one tet per lane, positive_within_pair), so that both do the same operations in the same
+// order: the tet's edge vectors from its corners (each a 3-array of T). Always inlined: the
+// guard calls these tens of millions of times, and a call costs as much as a test.
+template <class T>
+struct TetEdges {
+  T u[3], v[3], w[3], bc[3], bd[3], cd[3];  // b − a, c − a, d − a, c − b, d − b, d − c
+};
+template <class T, class Point>
+[[gnu::always_inline]] inline TetEdges<T> tet_edges(const Point& a, const Point& b, const Point& c, const Point& d) {
+  TetEdges<T> e;
+  for (int k = 0; k < 3; ++k) {
+    e.u[k] = b[k] - a[k], e.v[k] = c[k] - a[k], e.w[k] = d[k] - a[k];
+    e.bc[k] = c[k] - b[k], e.bd[k] = d[k] - b[k], e.cd[k] = d[k] - c[k];
+  }
+  return e;
+}
+template <class T>
+[[gnu::always_inline]] inline T six_volume(const TetEdges<T>& e) {
+  const T *u = e.u, *v = e.v, *w = e.w;
+  return u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0]) + u[2] * (v[0] * w[1] - v[1] * w[0]);
+}
+// The squared norms of the four faces' cross products (twice their areas, squared) and the
+// longest edge's squared length.
+template <class T>
+[[gnu::always_inline]] inline void face_and_edge_terms(const TetEdges<T>& e, T (&n)[4], T& l2) {
+  const auto norm2_cross = [](const T* x, const T* y) {
+    const T p = x[1] * y[2] - x[2] * y[1], q = x[2] * y[0] - x[0] * y[2], r = x[0] * y[1] - x[1] * y[0];
+    return p * p + q * q + r * r;
+  };
+  n[0] = norm2_cross(e.u, e.v), n[1] = norm2_cross(e.u, e.w), n[2] = norm2_cross(e.v, e.w), n[3] = norm2_cross(e.bc, e.bd);
+  const auto sq = [](const T* x) { return x[0] * x[0] + x[1] * x[1] + x[2] * x[2]; };
+  // std::max's choice lane by lane (the larger; the first of equals, the same value).
+  const auto larger = [](T x, T y) { return x < y ? y : x; };
+  l2 = larger(larger(larger(larger(larger(sq(e.u), sq(e.v)), sq(e.w)), sq(e.bc)), sq(e.bd)), sq(e.cd));
+}
+inline double limit_of(double bound) { return bound * (1 - 1e-9) * std::sqrt(6.0); }
+// The exact test once the square-root-free one did not decide (one tet, one lane).
+inline bool within_exact(const double (&n)[4], double l2, double limit) {
+  const double faces = 0.5 * (std::sqrt(n[0]) + std::sqrt(n[1]) + std::sqrt(n[2]) + std::sqrt(n[3]));
+  return std::sqrt(l2) * faces <= limit;
+}
+
+}  // namespace detail
+
 // Is tetrahedron (a, b, c, d) positively oriented with aspect_ratio(a, b, c, d) ≤ bound?
 // With AR = l_max·F / (√6·6V) (F the sum of face areas), 5 square roots instead of 10. The
 // test is stricter than the bound by a relative 1e-9, so that a tet it accepts passes any
 // later evaluation of aspect_ratio() despite round-off.
 inline bool positive_within(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d, double bound) {
-  const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-  const double v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-  const double w[3] = {d[0] - a[0], d[1] - a[1], d[2] - a[2]};
-  const double six_volume = u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0]) +
-                            u[2] * (v[0] * w[1] - v[1] * w[0]);
+  const auto e = detail::tet_edges<double>(a, b, c, d);
+  const double six_volume = detail::six_volume(e);
   if (!(six_volume > 0)) return false;
-  const auto norm2_cross = [](const double* x, const double* y) {
-    const double p = x[1] * y[2] - x[2] * y[1], q = x[2] * y[0] - x[0] * y[2], r = x[0] * y[1] - x[1] * y[0];
-    return p * p + q * q + r * r;
-  };
-  const double bc[3] = {c[0] - b[0], c[1] - b[1], c[2] - b[2]};
-  const double bd[3] = {d[0] - b[0], d[1] - b[1], d[2] - b[2]};
-  const double cd[3] = {d[0] - c[0], d[1] - c[1], d[2] - c[2]};
-  const double n0 = norm2_cross(u, v), n1 = norm2_cross(u, w), n2 = norm2_cross(v, w), n3 = norm2_cross(bc, bd);
-  const auto sq = [](const double* x) { return x[0] * x[0] + x[1] * x[1] + x[2] * x[2]; };
-  const double l2 = std::max({sq(u), sq(v), sq(w), sq(bc), sq(bd), sq(cd)});
-  const double limit = bound * (1 - 1e-9) * std::sqrt(6.0) * six_volume;
+  double n[4], l2;
+  detail::face_and_edge_terms(e, n, l2);
+  const double limit = detail::limit_of(bound) * six_volume;
   // Without square roots first: Σ√nᵢ ≤ 2·√Σnᵢ, so l2·Σnᵢ ≤ limit² proves the test below
   // (most tets pass with room). The 1e-6 margin dwarfs the round-off of both sides, so the
   // verdict is the one the exact test gives.
-  if (l2 * (n0 + n1 + n2 + n3) <= limit * limit * (1 - 1e-6)) return true;
-  const double faces = 0.5 * (std::sqrt(n0) + std::sqrt(n1) + std::sqrt(n2) + std::sqrt(n3));
-  return std::sqrt(l2) * faces <= limit;
+  if (l2 * (n[0] + n[1] + n[2] + n[3]) <= limit * limit * (1 - 1e-6)) return true;
+  return detail::within_exact(n, l2, limit);
 }
 
-// positive_within for two tetrahedra at once, (a0, b0, c0, d0) and (a1, b1, c1, d1): the
-// same operations in the same order on the two lanes of a vector of two doubles (IEEE
-// arithmetic lane by lane, no fused multiply-add on the baseline target), so each verdict
-// is positive_within's bit for bit; the square roots of the rare exact test per lane. The
-// snapping guard evaluates a split's sub-tets in pairs with it.
-inline std::array<bool, 2> positive_within_pair(const std::array<const Vec3*, 4>& t0, const std::array<const Vec3*, 4>& t1,
+// positive_within for two tetrahedra at once, t0 and t1 (their corners): the same
+// operations (detail::) on the two lanes of a vector of two doubles (IEEE arithmetic lane by
+// lane, no fused multiply-add on the baseline target), so each verdict is positive_within's
+// bit for bit; the square roots of the rare exact test per lane. The snapping guard
+// evaluates a split's sub-tets in pairs with it.
+[[gnu::always_inline]] inline std::array<bool, 2> positive_within_pair(const std::array<const Vec3*, 4>& t0, const std::array<const Vec3*, 4>& t1,
                                                 double bound) {
   using Pair = double __attribute__((vector_size(16)));
-  const auto lane = [&](int point, int d) { return Pair{(*t0[static_cast<std::size_t>(point)])[static_cast<std::size_t>(d)], (*t1[static_cast<std::size_t>(point)])[static_cast<std::size_t>(d)]}; };
-  const Pair a[3] = {lane(0, 0), lane(0, 1), lane(0, 2)}, b[3] = {lane(1, 0), lane(1, 1), lane(1, 2)},
-             c[3] = {lane(2, 0), lane(2, 1), lane(2, 2)}, d[3] = {lane(3, 0), lane(3, 1), lane(3, 2)};
-  const Pair u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-  const Pair v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-  const Pair w[3] = {d[0] - a[0], d[1] - a[1], d[2] - a[2]};
-  const Pair six_volume = u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0]) +
-                          u[2] * (v[0] * w[1] - v[1] * w[0]);
-  const auto norm2_cross = [](const Pair* x, const Pair* y) {
-    const Pair p = x[1] * y[2] - x[2] * y[1], q = x[2] * y[0] - x[0] * y[2], r = x[0] * y[1] - x[1] * y[0];
-    return p * p + q * q + r * r;
-  };
-  const Pair bc[3] = {c[0] - b[0], c[1] - b[1], c[2] - b[2]};
-  const Pair bd[3] = {d[0] - b[0], d[1] - b[1], d[2] - b[2]};
-  const Pair cd[3] = {d[0] - c[0], d[1] - c[1], d[2] - c[2]};
-  const Pair n0 = norm2_cross(u, v), n1 = norm2_cross(u, w), n2 = norm2_cross(v, w), n3 = norm2_cross(bc, bd);
-  const auto sq = [](const Pair* x) { return x[0] * x[0] + x[1] * x[1] + x[2] * x[2]; };
-  // std::max's order of comparisons, lane by lane (ties and NaN-free inputs give the same value).
-  const auto larger = [](Pair x, Pair y) { return x < y ? y : x; };
-  const Pair l2 = larger(larger(larger(larger(larger(sq(u), sq(v)), sq(w)), sq(bc)), sq(bd)), sq(cd));
-  const Pair limit = bound * (1 - 1e-9) * std::sqrt(6.0) * six_volume;
-  const Pair lhs = l2 * (n0 + n1 + n2 + n3), rhs = limit * limit * (1 - 1e-6);
+  std::array<std::array<Pair, 3>, 4> corner;
+  for (std::size_t i = 0; i < 4; ++i)
+    for (std::size_t k = 0; k < 3; ++k) corner[i][k] = Pair{(*t0[i])[k], (*t1[i])[k]};
+  const auto e = detail::tet_edges<Pair>(corner[0], corner[1], corner[2], corner[3]);
+  const Pair six_volume = detail::six_volume(e);
+  Pair n[4], l2;
+  detail::face_and_edge_terms(e, n, l2);
+  const Pair limit = detail::limit_of(bound) * six_volume;
+  const Pair lhs = l2 * (n[0] + n[1] + n[2] + n[3]), rhs = limit * limit * (1 - 1e-6);
   std::array<bool, 2> good{};
   for (int k = 0; k < 2; ++k) {
     if (!(six_volume[k] > 0)) continue;
@@ -134,8 +156,8 @@ inline std::array<bool, 2> positive_within_pair(const std::array<const Vec3*, 4>
       good[static_cast<std::size_t>(k)] = true;
       continue;
     }
-    const double faces = 0.5 * (std::sqrt(n0[k]) + std::sqrt(n1[k]) + std::sqrt(n2[k]) + std::sqrt(n3[k]));
-    good[static_cast<std::size_t>(k)] = std::sqrt(l2[k]) * faces <= limit[k];
+    const double lane_n[4] = {n[0][k], n[1][k], n[2][k], n[3][k]};
+    good[static_cast<std::size_t>(k)] = detail::within_exact(lane_n, l2[k], limit[k]);
   }
   return good;
 }
