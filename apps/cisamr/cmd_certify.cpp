@@ -23,6 +23,7 @@
 #include "core/timer.hpp"
 #include "geometry/periodic.hpp"
 #include "geometry/scene.hpp"
+#include "io/atomic_file.hpp"
 #include "io/mesh_io.hpp"
 #include "io/scene_io.hpp"
 #include "quality/certificate.hpp"
@@ -390,6 +391,8 @@ void add_certify_command(CLI::App& app, GlobalFlags& flags, int& exit_code) {
                   "in 3D also the least distance a centroid may lie from its cell's phase)")
       ->check(number_in(1e-300, 1e300));
   cmd->callback([args, &flags, &exit_code] {
+    for (const std::string* out : {&args->json, &args->html})  // before the mesh is read
+      if (!out->empty()) io::check_writable(*out);
     PhaseTimes times;
     std::optional<quality::Certificate> by_pieces;
     std::vector<geometry::Phase> piece_phases;

@@ -9,6 +9,7 @@
 
 #include "commands.hpp"
 #include "core/error.hpp"
+#include "io/atomic_file.hpp"
 #include "io/scene_io.hpp"
 #ifdef CISAMR_WITH_TETGEN
 #include "compare/compare3.hpp"
@@ -53,6 +54,8 @@ void add_compare_command(CLI::App& app, GlobalFlags& flags, int& exit_code) {
 #ifndef CISAMR_WITH_TETGEN
     throw InputError("--tetgen", "", "this cisamr was built without TetGen (configure with -DCISAMR_WITH_TETGEN=ON)");
 #else
+    for (const std::string* out : {&args->json, &args->html})  // before both meshers run
+      if (!out->empty()) io::check_writable(*out);
     const geometry::SceneDesc scene = io::read_scene(args->scene);
     if (scene.dimension != 3)
       throw InputError(args->scene, "dimension",

@@ -114,7 +114,12 @@ void run_mesh(MeshArgs& args, const GlobalFlags& flags, int& exit_code) {
       if (!output.pieces && (output.format ? *output.format : io::mesh_format_of(output.path)) == io::MeshFormat::medit)
         throw InputError(output.path, "", "--cohesive: Medit .mesh cannot hold cohesive elements; write .vtu, .msh or .inp");
     });
-  parallel::run_collectively(comm, [&] { check_explode(args, output); });
+  parallel::run_collectively(comm, [&] {
+    check_explode(args, output);
+    if (comm.rank() != 0) return;  // rank 0 writes the report and the picture
+    if (!args.report.empty()) io::check_writable(args.report);
+    if (!args.svg.empty()) io::check_writable(args.svg);
+  });
   output.explode = args.explode.value_or(0);
   // The mesh (a streamed run writes its pieces while meshing), the picture and the report,
   // or none of them.

@@ -13,6 +13,7 @@
 #include "core/memory.hpp"
 #include "geometry/oracle.hpp"
 #include "geometry/periodic.hpp"
+#include "io/atomic_file.hpp"
 #include "io/mesh_io.hpp"
 #include "io/mesh_svg.hpp"
 #include "io/scene_io.hpp"
@@ -368,6 +369,12 @@ Output plan_output(const Comm& comm, const std::string& requested, bool gather, 
   });
   if (out.pieces)
     for (int r = 0; r < comm.size(); ++r) out.piece_paths.push_back(parallel::piece_path(out.path, r));
+  // Where the files go, before any work: rank 0 writes the .pvtu or the one file, every rank
+  // its pieces (in the .pvtu's folder, which may be a different disk on each node).
+  parallel::run_collectively(comm, [&] {
+    if (out.pieces) io::check_writable(out.piece_paths[static_cast<std::size_t>(comm.rank())]);
+    if (comm.rank() == 0) io::check_writable(out.path);
+  });
   return out;
 }
 

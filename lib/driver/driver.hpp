@@ -141,7 +141,8 @@ struct Output {
   double explode = 0;
 };
 
-// Checks the requested output before any work (format; pieces or one gathered file).
+// Checks the requested output before any work (format; pieces or one gathered file; that
+// the folders it goes to exist and can be written, io::check_writable).
 // `format` ("vtu", "msh", "inp", "mesh"; empty: from the extension) names the format of a
 // path without one, such as "-"; `plane` the 2D Abaqus element type. Throws InputError on
 // every rank.

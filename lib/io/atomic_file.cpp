@@ -169,6 +169,29 @@ thread_local OutputSet* open_set = nullptr;
 
 }  // namespace
 
+void check_writable(const std::string& path) {
+  if (path.empty()) throw InputError("\"\"", "", "cannot write: the output path is empty");
+  const Destination d = resolve(path);
+  if (d.refusal) throw InputError(path, "", std::string("cannot write: ") + d.refusal);
+  if (d.error_number != 0) cannot_write(path, d.error_number);
+  if (d.kind == Destination::Kind::descriptor) {
+    const int flags = ::fcntl(d.descriptor, F_GETFL);
+    if (flags < 0) cannot_write(path, errno);
+    if ((flags & O_ACCMODE) == O_RDONLY) cannot_write(path, EBADF);
+    return;
+  }
+  if (d.kind == Destination::Kind::device) return;
+  const std::filesystem::path target(d.target);
+  if (target.filename().empty()) throw InputError(path, "", "cannot write: not a file name");
+  // The temporary is created in the target's folder and renamed there: both need it to be
+  // a searchable, writable folder.
+  const std::string folder = target.has_parent_path() ? target.parent_path().string() : std::string(".");
+  struct stat st {};
+  if (::stat(folder.c_str(), &st) != 0) cannot_write(path, errno);
+  if (!S_ISDIR(st.st_mode)) cannot_write(path, ENOTDIR);
+  if (::access(folder.c_str(), W_OK | X_OK) != 0) cannot_write(path, errno);
+}
+
 AtomicFile::AtomicFile(std::string path) : path_(std::move(path)) {
   if (path_.empty()) throw InputError("\"\"", "", "cannot write: the output path is empty");
   const Destination d = resolve(path_);

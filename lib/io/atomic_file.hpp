@@ -103,6 +103,14 @@ class OutputSet {
   bool committed_ = false;
 };
 
+// Throws what AtomicFile(path) would, without creating anything: for a file, when its
+// folder is missing or not writable (or the path names a folder, a block device, a socket, a
+// symlink loop); for a descriptor, when it is not open for writing. Devices and FIFOs are
+// not opened (a FIFO would wait for its reader). A command checks its outputs with it before
+// the work whose results they hold, so that a mistyped folder fails at once, not after an
+// hour of meshing.
+void check_writable(const std::string& path);
+
 // True when `path` is this process's standard output: "-", /dev/stdout, /dev/fd/1,
 // /proc/self/fd/1 (directly or through symlinks). A command whose data goes there prints
 // its summary on standard error instead. Never throws.

@@ -217,6 +217,30 @@ TEST_F(Cli, BadOutputsExitWithCode2) {
   EXPECT_EQ(piece.output.find(".part."), std::string::npos) << piece.output;
   EXPECT_EQ(piece.output.find(".tmp."), std::string::npos) << piece.output;
   EXPECT_EQ(files_other_than_json(), 0u);
+  // Every output's folder is checked before any work: the one error line, no progress of the
+  // meshing before it (it used to come after the whole run), nothing written. The example
+  // draws progress when all is well (the control).
+  const std::string example = std::string(CISAMR_SOURCE_DIR) + "/data/examples/spheres3d.json";
+  const std::string fine = (dir / "fine.vtu").string();
+  const CommandResult control = run("mesh " + example + " -o " + fine + " --progress-interval 0.001");
+  EXPECT_EQ(control.exit_code, 0) << control.output;
+  EXPECT_NE(control.output.find("] samr"), std::string::npos) << control.output;
+  fs::remove(fine);
+  const std::string nowhere = (dir / "no" / "such" / "dir").string();
+  for (const std::string& outputs : {" -o " + nowhere + "/out.vtu", " -o " + fine + " --report " + nowhere + "/r.json",
+                                     " -o " + fine + " --svg " + nowhere + "/p.svg",
+                                     " -o " + nowhere + "/out.pvtu --partitions 2 --stream"}) {
+    const CommandResult early = run("mesh " + example + outputs + " --progress-interval 0.001");
+    EXPECT_EQ(early.exit_code, 2) << outputs;
+    EXPECT_NE(early.output.find(nowhere), std::string::npos) << early.output;
+    EXPECT_NE(early.output.find(": cannot write: No such file or directory"), std::string::npos) << early.output;
+    EXPECT_EQ(std::count(early.output.begin(), early.output.end(), '\n'), 1) << early.output;
+    EXPECT_EQ(early.output.find("] samr"), std::string::npos) << early.output;
+    EXPECT_EQ(files_other_than_json(), 0u);
+  }
+  const CommandResult certificate = run("certify " + scene + " --json " + nowhere + "/c.json");
+  EXPECT_EQ(certificate.exit_code, 2);
+  EXPECT_NE(certificate.output.find(nowhere + "/c.json: cannot write"), std::string::npos) << certificate.output;
   const CommandResult usage = run("mesh");
   EXPECT_EQ(usage.exit_code, 2);
 }

@@ -89,6 +89,36 @@ TEST(AtomicFile, UnwritableDirectoryIsInputError) {
   }
 }
 
+// check_writable says what opening the file would say, without creating anything.
+TEST(AtomicFile, CheckWritableAgreesWithOpeningAndCreatesNothing) {
+  TempDir dir;
+  dir.write("file.txt", "x");
+  std::filesystem::create_directory(dir.file("folder"));
+  std::filesystem::create_symlink(dir.file("y"), dir.file("x"));
+  std::filesystem::create_symlink(dir.file("x"), dir.file("y"));
+  std::filesystem::create_symlink("folder/new.vtu", dir.file("dangling"));
+  const auto before = dir.entries();
+  const auto message = [](const auto& attempt) -> std::string {
+    try {
+      attempt();
+    } catch (const InputError& e) {
+      return e.file() + ": " + e.problem();
+    }
+    return "";
+  };
+  std::size_t refused = 0;
+  for (const std::string& path :
+       {dir.file("missing/sub/out.vtu"), dir.file("file.txt/out.vtu"), dir.file("folder"), dir.file("x"),
+        dir.file("dangling"), dir.file("file.txt"), dir.file("new.vtu"), dir.file("folder/new.vtu"), std::string("-"),
+        std::string(""), dir.file("folder/")}) {
+    const std::string checked = message([&] { check_writable(path); });
+    EXPECT_EQ(dir.entries(), before) << path;
+    EXPECT_EQ(checked, message([&] { AtomicFile file(path); })) << path;
+    refused += checked.empty() ? 0 : 1;
+  }
+  EXPECT_EQ(refused, 6u);  // the missing folder, the file as a folder, the folder, the loop, "", "folder/"
+}
+
 TEST(AtomicFile, SymlinkIsFollowedTargetReplacedLinkKept) {
   TempDir dir;
   std::filesystem::create_directory(dir.file("scratch"));
