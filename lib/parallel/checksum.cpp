@@ -130,12 +130,20 @@ template <int Dim>
 std::uint64_t mesh_checksum(const mesh::SimplexMesh<Dim>& m) {
   std::uint64_t sum = 0;
   for (std::size_t c = 0; c < m.cohesive.count(); ++c) sum += cohesive_term(m, c);
-  for (std::size_t c = 0; c < m.cell_count(); ++c) {
-    const CanonicalSimplex<Dim> t = canonical(m, c);
-    std::uint64_t h = mix(static_cast<std::uint64_t>(t.phase));
-    for (std::uint64_t x : t.xyz) h = mix(h ^ x);
-    sum += h;
-  }
+  // Each cell's hash is a chain of dependent mixes; the chains of four cells advance side by
+  // side (the same values), so that the processor overlaps them instead of waiting on one
+  // multiply after another.
+  const auto hash_cells = [&]<std::size_t kLanes>(std::size_t first) {
+    std::array<CanonicalSimplex<Dim>, kLanes> t;
+    std::array<std::uint64_t, kLanes> h;
+    for (std::size_t l = 0; l < kLanes; ++l) t[l] = canonical(m, first + l), h[l] = mix(static_cast<std::uint64_t>(t[l].phase));
+    for (std::size_t k = 0; k < t[0].xyz.size(); ++k)
+      for (std::size_t l = 0; l < kLanes; ++l) h[l] = mix(h[l] ^ t[l].xyz[k]);
+    for (std::size_t l = 0; l < kLanes; ++l) sum += h[l];
+  };
+  std::size_t c = 0;
+  for (; c + 4 <= m.cell_count(); c += 4) hash_cells.template operator()<4>(c);
+  for (; c < m.cell_count(); ++c) hash_cells.template operator()<1>(c);
   return sum;
 }
 
