@@ -88,7 +88,10 @@ class Snapper {
     find_edges();
     release_free_memory();  // the edge search's hash map
     build_options();
-    if (options_.bound > 0) guard();
+    if (options_.bound > 0) {
+      summarise_menus();
+      guard();
+    }
     apply();
     advance(options_.progress, passes() * tets(), passes() * tets());
     return std::move(nodes_);
@@ -105,6 +108,13 @@ class Snapper {
   // Options per node (CSR); nodes without a phase change nearby have none (they stay).
   std::vector<std::int32_t> option_begin_;
   std::vector<Option> option_;
+  // Per node, what build_menu asks of its options before it lists them (summarise_menus):
+  // the AND of their masks (the node's own mask when it has none) and kMenuChoice /
+  // kMenuFirstSnaps. The guard asks for every leaf of its windows, twice; dense arrays
+  // instead of each vertex's option range: most leaves stop at the first question.
+  std::vector<PhaseMask> menu_always_;
+  std::vector<std::uint8_t> menu_flags_;
+  static constexpr std::uint8_t kMenuChoice = 1, kMenuFirstSnaps = 2;
   std::vector<std::uint8_t> refused_;
   std::vector<PhaseMask> collapse_mask_;
   // Per node and phase joined by a collapse: the distance to the nearest point known to lie
@@ -454,28 +464,17 @@ class Snapper {
   using Menu = std::array<std::array<std::int32_t, kMaxMenu>, 4>;
   bool build_menu(std::int32_t t, Menu& menu, std::array<int, 4>& count) const {
     const auto& ids = nodes_.tet_nodes[static_cast<std::size_t>(t)];
-    bool choice = false;
-    for (int i = 0; i < 4; ++i) choice = choice || option_count(ids[static_cast<std::size_t>(i)]) > 1;
-    if (!choice) return false;
+    std::uint8_t flags = 0;
+    for (int i = 0; i < 4; ++i) flags |= menu_flags_[static_cast<std::size_t>(ids[static_cast<std::size_t>(i)])];
+    if (!(flags & kMenuChoice)) return false;
     // A leaf where some phase is in every option of every vertex is kept whole whatever
     // happens: only positions matter, and staying or collapsing is the same position.
     // Enumerate its snaps and one unmoved entry (the collapse, whose mask holds the stay's:
     // if even it leaves the leaf in a void only, nothing is emitted).
     PhaseMask always = ~PhaseMask{0};
-    for (int i = 0; i < 4; ++i) {
-      const std::int32_t v = ids[static_cast<std::size_t>(i)];
-      if (option_count(v) == 0) always &= nodes_.mask[static_cast<std::size_t>(v)];
-      for (std::int32_t o = option_begin_[static_cast<std::size_t>(v)]; o < option_begin_[static_cast<std::size_t>(v) + 1]; ++o)
-        always &= option_[static_cast<std::size_t>(o)].mask;
-    }
-    if (always != 0) {  // undeformed unless a vertex may snap: nothing to check then
-      bool snaps = false;
-      for (int i = 0; i < 4 && !snaps; ++i) {
-        const std::int32_t v = ids[static_cast<std::size_t>(i)];
-        snaps = option_count(v) > 0 && option_[static_cast<std::size_t>(option_begin_[static_cast<std::size_t>(v)])].kind == OptionKind::snap;
-      }
-      if (!snaps) return false;
-    }
+    for (int i = 0; i < 4; ++i) always &= menu_always_[static_cast<std::size_t>(ids[static_cast<std::size_t>(i)])];
+    // Undeformed unless a vertex may snap: nothing to check then.
+    if (always != 0 && !(flags & kMenuFirstSnaps)) return false;
     for (int i = 0; i < 4; ++i) {
       const std::int32_t v = ids[static_cast<std::size_t>(i)];
       auto& m = menu[static_cast<std::size_t>(i)];
@@ -525,17 +524,40 @@ class Snapper {
   //     (see pick_refusal) until none of them is bad.
   // A node ends at its first option not refused; the combination that happens in a leaf
   // avoids every refused option, so the leaf checked it in pass 2.
+  void summarise_menus() {
+    const std::size_t n = node_count();
+    menu_always_.assign(n, 0);
+    menu_flags_.assign(n, 0);
+    for (std::size_t v = 0; v < n; ++v) {
+      const std::int32_t begin = option_begin_[v], end = option_begin_[v + 1];
+      PhaseMask always = begin == end ? nodes_.mask[v] : ~PhaseMask{0};
+      for (std::int32_t o = begin; o < end; ++o) always &= option_[static_cast<std::size_t>(o)].mask;
+      menu_always_[v] = always;
+      menu_flags_[v] = static_cast<std::uint8_t>((end - begin > 1 ? kMenuChoice : 0) |
+                                                 (end > begin && option_[static_cast<std::size_t>(begin)].kind == OptionKind::snap
+                                                      ? kMenuFirstSnaps
+                                                      : 0));
+    }
+  }
+
   void guard() {
     Menu menu{};
     std::array<int, 4> count{};
     std::array<std::int32_t, 4> chosen{};
     const std::array<int, 4> first{0, 0, 0, 0};
     std::vector<std::uint8_t> likely(option_.size(), 0);  // pass 1's refusals
+    // When pass 2's window lies within pass 1's (always in the kernel), pass 2 visits only the
+    // leaves pass 1 found a menu for, in the same (ascending) order.
+    const auto& first_window = options_.first_pass_window;
+    const auto& second_window = options_.second_pass_window;
+    const bool nested = first_window.reach < 0 || (second_window.reach >= 0 && second_window.reach <= first_window.reach &&
+                                                   second_window.lo == first_window.lo && second_window.hi == first_window.hi);
+    std::vector<std::int32_t> with_menu;
     for (std::int32_t t = 0; t < static_cast<std::int32_t>(forest_.size()); ++t) {
       tet_done(2, t);
-      if (!forest_.is_leaf(t) || !nodes_.registered(t) || !options_.first_pass_window.holds(forest_, t) ||
-          !build_menu(t, menu, count))
+      if (!forest_.is_leaf(t) || !nodes_.registered(t) || !first_window.holds(forest_, t) || !build_menu(t, menu, count))
         continue;
+      if (nested) with_menu.push_back(t);
       memo_leaf(t);
       for (int i = 0; i < 4; ++i) chosen[static_cast<std::size_t>(i)] = menu[static_cast<std::size_t>(i)][0];
       take_menu(t, menu, {1, 1, 1, 1});
@@ -546,18 +568,22 @@ class Snapper {
     }
     for (std::size_t o = 0; o < likely.size(); ++o) refused_[o] = likely[o];
 
-    for (std::int32_t t = 0; t < static_cast<std::int32_t>(forest_.size()); ++t) {
+    const auto second_pass_leaf = [&](std::int32_t t) {
       tet_done(3, t);
-      if (!forest_.is_leaf(t) || !nodes_.registered(t) || !options_.second_pass_window.holds(forest_, t) ||
-          !build_menu(t, menu, count))
-        continue;
+      if (nested) return second_window.holds(forest_, t) && build_menu(t, menu, count);
+      return forest_.is_leaf(t) && nodes_.registered(t) && second_window.holds(forest_, t) && build_menu(t, menu, count);
+    };
+    const std::int32_t pass2_count = nested ? static_cast<std::int32_t>(with_menu.size()) : static_cast<std::int32_t>(forest_.size());
+    for (std::int32_t k = 0; k < pass2_count; ++k) {
+      const std::int32_t t = nested ? with_menu[static_cast<std::size_t>(k)] : k;
+      if (!second_pass_leaf(t)) continue;
       ++nodes_.guarded_leaves;
       memo_leaf(t);
       // Pass 1's refusals leave the menus (their combinations cannot happen). When every
       // vertex keeps its first option, this leaf's pass 1 found their combination good
       // (had it been bad, the leaf would have refused one of them): it is not checked again.
       // (Only if pass 1 ran on this leaf: the windows nest in the kernel, not in every caller.)
-      bool firsts_good = options_.first_pass_window.holds(forest_, t);
+      bool firsts_good = first_window.holds(forest_, t);
       for (int i = 0; i < 4; ++i) {
         auto& m = menu[static_cast<std::size_t>(i)];
         int& n = count[static_cast<std::size_t>(i)];
