@@ -516,14 +516,7 @@ class Snapper {
     return pick;
   }
 
-  // The guard, in two passes over the leaves, each leaf deciding from its own data and
-  // what the previous pass decided (so order-free):
-  //  1. every leaf checks the combination of its vertices' first options, the one expected
-  //     to happen, and refuses one option if it is bad: refusals almost sure to be needed;
-  //  2. every leaf checks every combination of the options not refused in pass 1, refusing
-  //     (see pick_refusal) until none of them is bad.
-  // A node ends at its first option not refused; the combination that happens in a leaf
-  // avoids every refused option, so the leaf checked it in pass 2.
+  // The per-node summary build_menu reads (menu_always_, menu_flags_), once the options are built.
   void summarise_menus() {
     const std::size_t n = node_count();
     menu_always_.assign(n, 0);
@@ -540,24 +533,32 @@ class Snapper {
     }
   }
 
+  // The guard, in two passes over the leaves, each leaf deciding from its own data and
+  // what the previous pass decided (so order-free):
+  //  1. every leaf checks the combination of its vertices' first options, the one expected
+  //     to happen, and refuses one option if it is bad: refusals almost sure to be needed;
+  //  2. every leaf checks every combination of the options not refused in pass 1, refusing
+  //     (see pick_refusal) until none of them is bad.
+  // A node ends at its first option not refused; the combination that happens in a leaf
+  // avoids every refused option, so the leaf checked it in pass 2.
   void guard() {
     Menu menu{};
     std::array<int, 4> count{};
     std::array<std::int32_t, 4> chosen{};
     const std::array<int, 4> first{0, 0, 0, 0};
     std::vector<std::uint8_t> likely(option_.size(), 0);  // pass 1's refusals
-    // When pass 2's window lies within pass 1's (always in the kernel), pass 2 visits only the
-    // leaves pass 1 found a menu for, in the same (ascending) order.
+    // Pass 1's scan also lists the leaves of pass 2's window that have a menu, in ascending
+    // order, so that pass 2 visits only those (in the kernel its window lies within pass 1's).
     const auto& first_window = options_.first_pass_window;
     const auto& second_window = options_.second_pass_window;
-    const bool nested = first_window.reach < 0 || (second_window.reach >= 0 && second_window.reach <= first_window.reach &&
-                                                   second_window.lo == first_window.lo && second_window.hi == first_window.hi);
     std::vector<std::int32_t> with_menu;
     for (std::int32_t t = 0; t < static_cast<std::int32_t>(forest_.size()); ++t) {
       tet_done(2, t);
-      if (!forest_.is_leaf(t) || !nodes_.registered(t) || !first_window.holds(forest_, t) || !build_menu(t, menu, count))
-        continue;
-      if (nested) with_menu.push_back(t);
+      if (!forest_.is_leaf(t) || !nodes_.registered(t)) continue;
+      const bool in_first = first_window.holds(forest_, t);
+      if (!(in_first || second_window.holds(forest_, t)) || !build_menu(t, menu, count)) continue;
+      with_menu.push_back(t);
+      if (!in_first) continue;
       memo_leaf(t);
       for (int i = 0; i < 4; ++i) chosen[static_cast<std::size_t>(i)] = menu[static_cast<std::size_t>(i)][0];
       take_menu(t, menu, {1, 1, 1, 1});
@@ -568,15 +569,10 @@ class Snapper {
     }
     for (std::size_t o = 0; o < likely.size(); ++o) refused_[o] = likely[o];
 
-    const auto second_pass_leaf = [&](std::int32_t t) {
+    for (const std::int32_t t : with_menu) {
       tet_done(3, t);
-      if (nested) return second_window.holds(forest_, t) && build_menu(t, menu, count);
-      return forest_.is_leaf(t) && nodes_.registered(t) && second_window.holds(forest_, t) && build_menu(t, menu, count);
-    };
-    const std::int32_t pass2_count = nested ? static_cast<std::int32_t>(with_menu.size()) : static_cast<std::int32_t>(forest_.size());
-    for (std::int32_t k = 0; k < pass2_count; ++k) {
-      const std::int32_t t = nested ? with_menu[static_cast<std::size_t>(k)] : k;
-      if (!second_pass_leaf(t)) continue;
+      if (!second_window.holds(forest_, t)) continue;
+      build_menu(t, menu, count);  // pass 1 found one
       ++nodes_.guarded_leaves;
       memo_leaf(t);
       // Pass 1's refusals leave the menus (their combinations cannot happen). When every
