@@ -167,9 +167,11 @@ bool write_all(int fd, const char* data, std::size_t size, int& error_number) {
 
 thread_local OutputSet* open_set = nullptr;
 
-}  // namespace
-
-void check_writable(const std::string& path) {
+// resolve(), refusing what no writer can write (InputError(path, "", "cannot write: ...")):
+// an empty path, a folder, block device or socket, a symlink loop, a descriptor not open
+// for writing, a file path without a file name. AtomicFile and check_writable both start
+// here, so they refuse alike.
+Destination writable_destination(const std::string& path) {
   if (path.empty()) throw InputError("\"\"", "", "cannot write: the output path is empty");
   const Destination d = resolve(path);
   if (d.refusal) throw InputError(path, "", std::string("cannot write: ") + d.refusal);
@@ -178,11 +180,18 @@ void check_writable(const std::string& path) {
     const int flags = ::fcntl(d.descriptor, F_GETFL);
     if (flags < 0) cannot_write(path, errno);
     if ((flags & O_ACCMODE) == O_RDONLY) cannot_write(path, EBADF);
-    return;
   }
-  if (d.kind == Destination::Kind::device) return;
+  if (d.kind == Destination::Kind::file && std::filesystem::path(d.target).filename().empty())
+    throw InputError(path, "", "cannot write: not a file name");
+  return d;
+}
+
+}  // namespace
+
+void check_writable(const std::string& path) {
+  const Destination d = writable_destination(path);
+  if (d.kind != Destination::Kind::file) return;
   const std::filesystem::path target(d.target);
-  if (target.filename().empty()) throw InputError(path, "", "cannot write: not a file name");
   // The temporary is created in the target's folder and renamed there: both need it to be
   // a searchable, writable folder.
   const std::string folder = target.has_parent_path() ? target.parent_path().string() : std::string(".");
@@ -193,15 +202,9 @@ void check_writable(const std::string& path) {
 }
 
 AtomicFile::AtomicFile(std::string path) : path_(std::move(path)) {
-  if (path_.empty()) throw InputError("\"\"", "", "cannot write: the output path is empty");
-  const Destination d = resolve(path_);
-  if (d.refusal) throw InputError(path_, "", std::string("cannot write: ") + d.refusal);
-  if (d.error_number != 0) cannot_write(path_, d.error_number);
+  const Destination d = writable_destination(path_);
   target_ = d.target;
   if (d.kind == Destination::Kind::descriptor) {
-    const int flags = ::fcntl(d.descriptor, F_GETFL);
-    if (flags < 0) cannot_write(path_, errno);
-    if ((flags & O_ACCMODE) == O_RDONLY) cannot_write(path_, EBADF);
     fd_ = d.descriptor;
     owns_fd_ = false;
   } else if (d.kind == Destination::Kind::device) {
@@ -209,8 +212,6 @@ AtomicFile::AtomicFile(std::string path) : path_(std::move(path)) {
     fd_ = ::open(target_.c_str(), O_WRONLY | O_CLOEXEC);
     if (fd_ < 0) cannot_write(path_, errno);
   } else {
-    if (std::filesystem::path(target_).filename().empty())
-      throw InputError(path_, "", "cannot write: not a file name");
     temporary_path_ = temporary_name_for(target_);
     // Registered before it exists, so that no signal can find it unrecorded.
     registry_slot_ = register_temporary(temporary_path_);

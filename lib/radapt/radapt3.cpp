@@ -135,9 +135,6 @@ class Snapper {
   void tet_done(int pass, std::int32_t t) const {
     advance_sometimes(options_.progress, pass * tets() + t, passes() * tets());
   }
-  int option_count(std::int32_t v) const {
-    return option_begin_[static_cast<std::size_t>(v) + 1] - option_begin_[static_cast<std::size_t>(v)];
-  }
 
   // 1. Vertices of every leaf in the window and their closure masks. A leaf that no boundary meets lies
   //    inside one phase, so its vertices take that phase without asking the oracle per vertex.
