@@ -12,6 +12,7 @@
 #include "core/timer.hpp"
 #include "io/atomic_file.hpp"
 #include "io/scene_io.hpp"
+#include "parallel/ghost.hpp"
 #include "partition/partition.hpp"
 
 namespace cisamr::app {
@@ -71,6 +72,7 @@ void add_partition_command(CLI::App& app, GlobalFlags& flags, int& exit_code) {
     options.oversubscription = args->oversubscription;
     using Method = partition::PartitionOptions::Method;
     options.method = args->method == "merge" ? Method::merge : args->method == "bisection" ? Method::bisection : Method::best;
+    options = parallel::ghost_aware(options, scene.dimension);  // the boxes `cisamr mesh` meshes
     partition::Partition p;
     const auto t0 = std::chrono::steady_clock::now();
     {
@@ -91,6 +93,10 @@ void add_partition_command(CLI::App& app, GlobalFlags& flags, int& exit_code) {
       std::fprintf(summary, "  %-14s %6s %12s %12s %9s %14s %9s\n", "method", "parts", "max load", "mean load", "max/mean",
                    "shared faces", "time [s]");
       print_row(summary, p.method.c_str(), p, ours_s);
+      if (p.ghost_weight > 0)  // 3D: what the cuts balanced
+        std::fprintf(summary, "  cost (load and %.2f x the load of a %lld-cell ghost): max %.6g, mean %.6g, max/mean %.4f\n",
+                     p.ghost_weight, static_cast<long long>(p.ghost_cells), p.max_cost(), p.mean_cost(),
+                     p.mean_cost() > 0 ? p.max_cost() / p.mean_cost() : 1.0);
       if (args->compare_uniform) {
         const auto t1 = std::chrono::steady_clock::now();
         const partition::Partition u = partition::uniform_grid_partition(scene, args->n, options);

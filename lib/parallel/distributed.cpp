@@ -67,7 +67,7 @@ namespace distributed_detail {
 struct Box {  // a partition as broadcast by rank 0
   std::int32_t id;
   std::int64_t lo[3], hi[3];
-  double load;
+  double load, cost;
 };
 
 struct StlBox {  // an STL surface's bounding box, as the rank that read it computed it
@@ -261,7 +261,8 @@ DistributedMesh<Dim> mesh_partitions(const Comm& comm, geometry::SceneDesc scene
     ScopedPhase timer(&out.times, "partition");
     run_collectively(comm, [&] {
       if (rank != 0) return;
-      const partition::Partition p = partition::partition_domain(scene, n, options.partitioning, stl.loads);
+      const partition::Partition p =
+          partition::partition_domain(scene, n, ghost_aware(options.partitioning, Dim, options.ghost), stl.loads);
       Packer pack;
       pack.put_string(p.method);
       std::vector<Box> parts;
@@ -269,7 +270,7 @@ DistributedMesh<Dim> mesh_partitions(const Comm& comm, geometry::SceneDesc scene
         parts.push_back(Box{part.id,
                             {part.lattice_min[0], part.lattice_min[1], part.lattice_min[2]},
                             {part.lattice_max[0], part.lattice_max[1], part.lattice_max[2]},
-                            part.load});
+                            part.load, part.cost});
       pack.put_vector(parts);
       message = pack.take();
     });
@@ -386,6 +387,7 @@ DistributedMesh<Dim> mesh_partitions(const Comm& comm, geometry::SceneDesc scene
       s.kernel_seconds = seconds_since(t0);
       for (int d = 0; d < Dim; ++d) s.lattice_min[d] = region.box.lo[d], s.lattice_max[d] = region.box.hi[d];
       s.load = boxes[static_cast<std::size_t>(p)].load;
+      s.cost = boxes[static_cast<std::size_t>(p)].cost;
       s.ghost = region.ghost;
       s.ghost_cells = o.result.counters.coarse_cells - box_cells;
       s.inclusions = static_cast<std::int64_t>(region.inclusions.size());

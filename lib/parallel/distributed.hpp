@@ -42,6 +42,7 @@ struct PartitionSummary {
   int id = 0, rank = 0;
   std::array<std::int64_t, 3> lattice_min{}, lattice_max{};  // coarse cells [min, max) (Dim used)
   double load = 0;                // paper Eq. 2
+  double cost = 0;                // what the partitioner balanced: load + the ghost's weighted load (3D)
   int ghost = 0;                  // ghost width (coarse cells) it was meshed with
   std::int64_t ghost_cells = 0;   // coarse cells meshed beyond its box
   std::int64_t inclusions = 0;    // inclusions its ghost region loads

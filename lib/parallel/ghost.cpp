@@ -209,6 +209,16 @@ int ghost_margin3(int level, int max_level) {
   return static_cast<int>(std::floor(samr_reach + std::ldexp(kKernelReach3, -std::max(0, level)))) + 1;
 }
 
+partition::PartitionOptions ghost_aware(partition::PartitionOptions options, int dimension, const GhostRule& rule) {
+  if (dimension != 3) return options;
+  options.ghost_cells_at_level.clear();
+  for (int level = 0; level <= 3; ++level)  // ghost_margin3 is 2 from level 3 on
+    options.ghost_cells_at_level.push_back(rule.margin3_cubes > 0 ? static_cast<int>(std::ceil(rule.margin3_cubes))
+                                                                   : ghost_margin3(level));
+  options.ghost_weight = kGhostCostWeight3;
+  return options;
+}
+
 template <int Dim>
 GhostRegion<Dim> ghost_region(const InclusionIndex<Dim>& index, const grid::Lattice<Dim>& lattice,
                               const grid::CellRange<Dim>& box, const GhostRule& rule) {

@@ -13,6 +13,7 @@
 #include "geometry/scene.hpp"
 #include "grid/lattice.hpp"
 #include "pipeline/effective_levels.hpp"
+#include "partition/partition.hpp"
 #include "pipeline/pipeline.hpp"
 #include "radapt/radapt2.hpp"
 #include "radapt/radapt3.hpp"
@@ -111,6 +112,20 @@ struct GhostRule {
   // comparison.
   int max_closure_rounds = 0;
 };
+
+// What a cube of 3D ghost costs the partitioner, as a fraction of a box cube's work: SAMR
+// refines the whole margin, r-adaptivity works on its inner cells only (kRadaptWindow3),
+// subdivision, quality and output not at all, and the outer cubes hold less of what is costly.
+// Chosen by measurement (validation/bench/SCALING.md, "A ghost-aware balance"): of 0.35, 0.5,
+// 0.65 and 0.8, 0.35 gave the lowest slowest partition on spheres300 at 16 and 64 partitions
+// and on E4 at 16.
+inline constexpr double kGhostCostWeight3 = 0.35;
+
+// `options` with the 3D ghost for the partitioner to balance (partition::PartitionOptions::
+// ghost_cells_at_level, ghost_weight): ghost_margin3 by level, or the forced margin; 2D
+// partitions balance their loads only (their ghost is 2 cells: 1.15 times the domain at 64).
+// Both `cisamr mesh` and `cisamr partition` partition with it, so they give the same boxes.
+partition::PartitionOptions ghost_aware(partition::PartitionOptions options, int dimension, const GhostRule& rule = {});
 
 // The full scene's lattice (every inclusion's levels count for Lmax), built from the
 // description alone, without geometry.

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <unordered_map>
 
@@ -286,6 +287,17 @@ double LoadField::box_load(const std::array<std::int64_t, 3>& lo, const std::arr
 
 double LoadField::total() const { return box_load({0, 0, 0}, n); }
 
+double LoadField::box_cost(const std::array<std::int64_t, 3>& lo, const std::array<std::int64_t, 3>& hi) const {
+  const double own = box_load(lo, hi);
+  if (ghost_raster == 0 || ghost_weight == 0) return own;
+  std::array<std::int64_t, 3> glo = lo, ghi = hi;
+  for (int d = 0; d < dim; ++d) {
+    glo[d] = std::max<std::int64_t>(0, lo[d] - ghost_raster);
+    ghi[d] = std::min(n[d], hi[d] + ghost_raster);
+  }
+  return own + ghost_weight * std::max(0.0, box_load(glo, ghi) - own);
+}
+
 namespace {
 
 // The raster of `scene` (no loads yet) and the sample spacing.
@@ -308,6 +320,14 @@ LoadField empty_field(const SceneDesc& scene, const PartitionOptions& options, d
     f.n[d] = d < f.dim ? (f.lattice_cells[d] + f.coarsen - 1) / f.coarsen : 1;
   if (allocate) f.cells.assign(static_cast<std::size_t>(f.n[0] * f.n[1] * f.n[2]), 0.0);
   spacing = options.sample_spacing > 0 ? options.sample_spacing : 0.25 * f.coarsen * f.h;
+  const auto& widths = options.ghost_cells_at_level;
+  if (!widths.empty() && options.ghost_weight > 0 && !f.any_periodic() && !scene.inclusions.empty()) {
+    int coarsest = std::numeric_limits<int>::max();
+    for (const Inclusion& inc : scene.inclusions) coarsest = std::min(coarsest, inc.levels > 0 ? inc.levels : scene.levels);
+    f.ghost_cells = widths[static_cast<std::size_t>(std::clamp<int>(coarsest, 0, static_cast<int>(widths.size()) - 1))];
+    f.ghost_raster = (f.ghost_cells + f.coarsen - 1) / f.coarsen;
+    f.ghost_weight = options.ghost_weight;
+  }
   return f;
 }
 

@@ -34,6 +34,13 @@ struct LoadField {
   // Load of raster box [lo, hi) (half-open raster indices).
   double box_load(const std::array<std::int64_t, 3>& lo, const std::array<std::int64_t, 3>& hi) const;
   double total() const;
+  // The parallel mesher's ghost (PartitionOptions::ghost_cells_at_level): its width in
+  // lattice cells and in raster cells (rounded up), and the weight of its load.
+  std::int64_t ghost_cells = 0, ghost_raster = 0;
+  double ghost_weight = 0;
+  // What meshing raster box [lo, hi) costs: its load plus ghost_weight times the load of its
+  // ghost (the box grown by ghost_raster, clipped to the domain).
+  double box_cost(const std::array<std::int64_t, 3>& lo, const std::array<std::int64_t, 3>& hi) const;
 };
 
 // `given`: per inclusion (scene order), the loads of STL surfaces whose triangles the scene

@@ -181,6 +181,12 @@ std::string to_json(const Partition& p, const std::string& scene_path) {
                     {"mean_load", p.mean_load()},
                     {"imbalance", p.imbalance()},
                     {"shared_face_measure", p.shared_face_measure()}};
+  if (p.ghost_weight > 0) {  // the cuts balanced each box's load plus its ghost's
+    doc["summary"]["ghost_cells"] = p.ghost_cells;
+    doc["summary"]["ghost_weight"] = p.ghost_weight;
+    doc["summary"]["max_cost"] = p.max_cost();
+    doc["summary"]["mean_cost"] = p.mean_cost();
+  }
   json parts = json::array();
   for (const auto& part : p.parts) {
     json j;
@@ -191,6 +197,7 @@ std::string to_json(const Partition& p, const std::string& scene_path) {
     j["lattice_min"] = ivec(part.lattice_min, dim);
     j["lattice_max"] = ivec(part.lattice_max, dim);
     j["load"] = part.load;
+    if (p.ghost_weight > 0) j["cost"] = part.cost;
     json nbs = json::array();
     for (const auto& nb : part.neighbours) {
       json n;

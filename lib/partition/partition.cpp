@@ -27,7 +27,14 @@ using Index3 = std::array<std::int64_t, 3>;
 struct RBox {  // a box in raster indices, half-open
   Index3 lo{}, hi{};
   double load = 0;
+  double cost = 0;  // LoadField::box_cost: what the cuts balance
 };
+
+// Sets b's load and cost from the field.
+void weigh(const LoadField& f, RBox& b) {
+  b.load = f.box_load(b.lo, b.hi);
+  b.cost = f.box_cost(b.lo, b.hi);
+}
 
 // Measure (length/area) of the face between two boxes that touch along `axis`.
 double face_measure(const LoadField& f, const RBox& a, const RBox& b, int axis) {
@@ -53,9 +60,9 @@ int full_face_axis(const LoadField& f, const RBox& a, const RBox& b) {
   return -1;
 }
 
-double max_load(const std::vector<RBox>& boxes) {
+double max_cost(const std::vector<RBox>& boxes) {
   double m = 0;
-  for (const auto& b : boxes) m = std::max(m, b.load);
+  for (const auto& b : boxes) m = std::max(m, b.cost);
   return m;
 }
 
@@ -179,22 +186,23 @@ std::optional<std::vector<RBox>> merge_from_leaves(const LoadField& f, const Ind
         r.lo[d] = cut[d][b.lo[d]];
         r.hi[d] = cut[d][b.hi[d]];
       }
-      r.load = b.load;
+      weigh(f, r);
       out.push_back(r);
     }
   return out;
 }
 
-// Step 4: slide the faces of the most loaded box. Each move re-cuts the union of that box
-// and a full-face partner at the lattice line that minimises the larger half; applied
-// only when it lowers that box's load, so the maximum never grows and the loop ends.
+// Step 4: slide the faces of the costliest box (LoadField::box_cost: its load, plus its
+// ghost's when the options give one). Each move re-cuts the union of that box and a
+// full-face partner at the lattice line that minimises the costlier half; applied only when
+// it lowers that box's cost, so the maximum never grows and the loop ends.
 int rebalance(const LoadField& f, std::vector<RBox>& boxes) {
   int moves = 0;
   const int limit = 20 * static_cast<int>(boxes.size()) + 100;
   for (int iter = 0; iter < limit; ++iter) {
     std::size_t top = 0;
     for (std::size_t i = 1; i < boxes.size(); ++i)
-      if (boxes[i].load > boxes[top].load) top = i;
+      if (boxes[i].cost > boxes[top].cost) top = i;
     struct Move {
       double worst = INFINITY, face = INFINITY;
       std::size_t partner = 0;
@@ -212,14 +220,14 @@ int rebalance(const LoadField& f, std::vector<RBox>& boxes) {
           RBox a = u, b = u;
           a.hi[axis] = c;
           b.lo[axis] = c;
-          a.load = f.box_load(a.lo, a.hi);
-          b.load = f.box_load(b.lo, b.hi);
-          const double worst = std::max(a.load, b.load);
+          weigh(f, a);
+          weigh(f, b);
+          const double worst = std::max(a.cost, b.cost);
           const double face = face_measure(f, a, b, axis);
           if (worst < best.worst || (worst == best.worst && face < best.face)) best = {worst, face, j, a, b};
         }
     }
-    if (!(best.worst < boxes[top].load * (1 - 1e-12))) break;
+    if (!(best.worst < boxes[top].cost * (1 - 1e-12))) break;
     boxes[top] = best.first;
     boxes[best.partner] = best.second;
     ++moves;
@@ -259,9 +267,11 @@ void bisect(const LoadField& f, const RBox& box, int k, std::vector<RBox>& out) 
       RBox a = box, b = box;
       a.hi[axis] = c;
       b.lo[axis] = c;
-      a.load = f.box_load(a.lo, a.hi);
-      b.load = f.box_load(b.lo, b.hi);
-      const double worst = std::max(a.load / k1, b.load / k2);
+      weigh(f, a);
+      weigh(f, b);
+      // A half's cost counts its own ghost beyond the box being cut, not yet the ghosts
+      // between its own parts, which both halves will have alike.
+      const double worst = std::max(a.cost / k1, b.cost / k2);
       const double face = face_measure(f, a, b, axis);
       cuts.push_back({worst, face, a, b});
       best = std::min(best, worst);
@@ -326,6 +336,8 @@ Partition assemble(const LoadField& f, const geometry::SceneDesc& scene, std::ve
   p.periodic = f.periodic;
   p.load_exponent = f.exponent;
   p.total_load = f.total();
+  p.ghost_weight = f.ghost_weight;
+  p.ghost_cells = f.ghost_cells;
   for (std::size_t i = 0; i < boxes.size(); ++i) {
     Part part;
     part.id = part.rank = static_cast<int>(i);
@@ -341,6 +353,7 @@ Partition assemble(const LoadField& f, const geometry::SceneDesc& scene, std::ve
       }
     }
     part.load = boxes[i].load;
+    part.cost = boxes[i].cost;
     p.parts.push_back(part);
   }
   // Neighbours: faces of positive measure, plus periodic ones across the domain.
@@ -442,7 +455,7 @@ std::vector<RBox> uniform_boxes(const LoadField& f, int n) {
     for (std::int64_t j = 0; j < best[1]; ++j)
       for (std::int64_t i = 0; i < best[0]; ++i) {
         RBox b{{cut[0][i], cut[1][j], cut[2][k]}, {cut[0][i + 1], cut[1][j + 1], cut[2][k + 1]}, 0};
-        b.load = f.box_load(b.lo, b.hi);
+        weigh(f, b);
         boxes.push_back(b);
       }
   return boxes;
@@ -457,6 +470,18 @@ double Partition::max_load() const {
 }
 
 double Partition::mean_load() const { return parts.empty() ? 0 : total_load / parts.size(); }
+
+double Partition::max_cost() const {
+  double m = 0;
+  for (const auto& p : parts) m = std::max(m, p.cost);
+  return m;
+}
+
+double Partition::mean_cost() const {
+  double s = 0;
+  for (const auto& p : parts) s += p.cost;
+  return parts.empty() ? 0 : s / static_cast<double>(parts.size());
+}
 
 double Partition::shared_face_measure() const {
   double s = 0;
@@ -502,7 +527,7 @@ Partition partition_domain(const geometry::SceneDesc& scene, int n, const Partit
   auto consider = [&](std::vector<RBox> boxes, const Index3& leaves, int merges) {
     const int moves = options.rebalance ? rebalance(f, boxes) : 0;
     Candidate c{std::move(boxes), 0, 0, leaves, merges, moves};
-    c.worst = max_load(c.boxes);
+    c.worst = max_cost(c.boxes);
     c.faces = internal_faces(f, c.boxes);
     if (!best || c.worst < best->worst * (1 - 1e-12) ||
         (c.worst <= best->worst * (1 + 1e-12) && c.faces < best->faces))
@@ -511,7 +536,8 @@ Partition partition_domain(const geometry::SceneDesc& scene, int n, const Partit
   using Method = PartitionOptions::Method;
   if (options.method != Method::merge) {
     std::vector<RBox> boxes;
-    RBox all{{0, 0, 0}, f.n, f.total()};
+    RBox all{{0, 0, 0}, f.n};
+    weigh(f, all);
     bisect(f, all, n, boxes);
     if (static_cast<int>(boxes.size()) == n) consider(std::move(boxes), {0, 0, 0}, 0);
   }

@@ -336,6 +336,30 @@ TEST_F(Cli, Meshes3DScenesWithinTheBound) {
 // inclusions bring in (a circle across a corner: 3), and as many slaves as the .inp has
 // constrained nodes (one *EQUATION per slave and dof, counted from the file); a parallel run
 // writing pieces also times the exchange of masters. A non-periodic report has no such object.
+// `cisamr partition` writes the boxes `cisamr mesh --partitions` meshes: both balance each 3D
+// box's load and its ghost's (parallel::ghost_aware), and say so.
+TEST_F(Cli, PartitionGivesTheBoxesTheMesherMeshes) {
+  const std::string scene = std::string(CISAMR_SOURCE_DIR) + "/data/examples/spheres3d.json";
+  const fs::path parts = dir / "parts.json", report = dir / "r.json";
+  const CommandResult p = run("partition " + scene + " -n 7 -o " + parts.string() + " -q");
+  ASSERT_EQ(p.exit_code, 0) << p.output;
+  const CommandResult m = run("mesh " + scene + " -o " + (dir / "m.pvtu").string() + " --partitions 7 -q --report " +
+                              report.string());
+  ASSERT_EQ(m.exit_code, 0) << m.output;
+  std::ifstream parts_in(parts), report_in(report);
+  const auto boxes = nlohmann::json::parse(parts_in), meshed = nlohmann::json::parse(report_in);
+  ASSERT_EQ(boxes["parts"].size(), 7u);
+  ASSERT_EQ(meshed["partitions"].size(), 7u);
+  EXPECT_GT(boxes["summary"]["ghost_weight"].get<double>(), 0.0);
+  for (std::size_t i = 0; i < 7; ++i) {
+    EXPECT_EQ(boxes["parts"][i]["lattice_min"], meshed["partitions"][i]["lattice_min"]) << i;
+    EXPECT_EQ(boxes["parts"][i]["lattice_max"], meshed["partitions"][i]["lattice_max"]) << i;
+    EXPECT_EQ(boxes["parts"][i]["cost"], meshed["partitions"][i]["cost"]) << i;
+  }
+  EXPECT_EQ(boxes["summary"]["max_cost"], meshed["load"]["cost_max"]);
+  EXPECT_GT(meshed["load"]["cost_max"].get<double>(), meshed["load"]["max"].get<double>());  // the ghost counts
+}
+
 TEST_F(Cli, PeriodicReportDescribesTheTorus) {
   const fs::path scene = dir / "torus.json";
   std::ofstream(scene) << R"({"format": "cisamr-scene/1", "dimension": 2,

@@ -646,7 +646,8 @@ TEST(Invariance3, WindowsLeaveOutTheGhostsOuterPart) {
 // and refusals of the leaves beyond them (measured: one cell is the least these scenes pass
 // with, at 7, 8, 27 and 64 partitions; README.md, "Ghost region (3D)"). Half a cell of the
 // deciding level is a whole number of fine cells only below Lmax (these scenes have
-// extra levels); at Lmax the window would round up to a whole cell.
+// extra levels); at Lmax the window would round up to a whole cell. Whether a face meets a
+// refusal there depends on where the boxes lie: each scene must break at 7 or 8 partitions.
 TEST(Invariance3, TooSmallWindowBreaksIt) {
   GhostRule narrow;
   narrow.radapt_window_cells3 = narrow.swap_window_cells3 = 0.5;
@@ -654,9 +655,13 @@ TEST(Invariance3, TooSmallWindowBreaksIt) {
     if (c.name != "packed-level1" && c.name != "packed-level2") continue;
     SCOPED_TRACE(c.name);
     const testing::RunOutcome3 seq = testing::run_sequential3(c.scene, c.options);
-    const testing::RunOutcome3 par = testing::run_parallel3(kSerial, c.scene, 7, narrow, c.options);
     ASSERT_FALSE(seq.failed) << seq.error;
-    EXPECT_TRUE(par.failed || par.checksum != seq.checksum);
+    int broken = 0;
+    for (int n : {7, 8}) {
+      const testing::RunOutcome3 par = testing::run_parallel3(kSerial, c.scene, n, narrow, c.options);
+      broken += par.failed || par.checksum != seq.checksum;
+    }
+    EXPECT_GT(broken, 0);
   }
 }
 

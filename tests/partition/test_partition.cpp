@@ -228,6 +228,73 @@ TEST(Partition, SpheresIn3DAndPeriodicNeighbours) {
   EXPECT_LE(p.max_load(), partition::uniform_grid_partition(s, 12).max_load());
 }
 
+// The parallel mesher's 3D ghost (issue #15): with PartitionOptions' ghost, each box costs its
+// load plus the weighted load of its ghost (the box grown, clipped to the domain), and the
+// cuts balance that cost. On a uniform lattice of spheres, 27 boxes: the costliest box is
+// cheaper than the costliest of the load-balanced boxes (by the same cost), boxes inside the
+// domain get less load than those at its corners, and each box's cost is its load plus the
+// weighted ghost load of the field's sums.
+TEST(Partition, GhostAwareCostBalancesEachBoxWithItsGhost) {
+  SceneDesc s = base_scene(3, 60, 1);
+  for (int k = 0; k < 6; ++k)
+    for (int j = 0; j < 6; ++j)
+      for (int i = 0; i < 6; ++i) s.inclusions.push_back({Sphere{{5.0 + 10 * i, 5.0 + 10 * j, 5.0 + 10 * k}, 3.0}, 2});
+  partition::PartitionOptions plain_options, ghost_options;
+  ghost_options.ghost_cells_at_level = {7, 4, 3, 2};  // level 1: 4 cells
+  ghost_options.ghost_weight = 0.35;
+  const auto plain = partition::partition_domain(s, 27, plain_options);
+  const auto aware = partition::partition_domain(s, 27, ghost_options);
+  expect_valid_tiling(plain, 27);
+  expect_valid_tiling(aware, 27);
+  EXPECT_EQ(aware.ghost_cells, 4);
+  EXPECT_EQ(aware.ghost_weight, 0.35);
+  EXPECT_EQ(plain.ghost_weight, 0.0);
+
+  const partition::LoadField field = partition::build_load_field(s, ghost_options);
+  ASSERT_EQ(field.coarsen, 1);  // raster = lattice: boxes in lattice cells
+  const auto cost_of = [&](const partition::Part& part) {
+    std::array<std::int64_t, 3> lo{}, hi{}, glo{}, ghi{};
+    for (int d = 0; d < 3; ++d) {
+      lo[d] = part.lattice_min[d], hi[d] = part.lattice_max[d];
+      glo[d] = std::max<std::int64_t>(0, lo[d] - 4), ghi[d] = std::min<std::int64_t>(60, hi[d] + 4);
+    }
+    const double own = field.box_load(lo, hi);
+    return own + 0.35 * (field.box_load(glo, ghi) - own);
+  };
+  double plain_worst = 0;
+  for (const auto& part : plain.parts) {
+    EXPECT_EQ(part.cost, part.load);
+    plain_worst = std::max(plain_worst, cost_of(part));
+  }
+  // Loads of the boxes at a corner of the domain (three domain faces) and of those with at
+  // most one domain face (the rest of their surface carries ghost).
+  double corner_load = 0, inner_load = 1e300;
+  for (const auto& part : aware.parts) {
+    EXPECT_NEAR(part.cost, cost_of(part), 1e-9 * part.cost);
+    int faces = 0;
+    for (int d = 0; d < 3; ++d) faces += (part.lattice_min[d] == 0) + (part.lattice_max[d] == 60);
+    if (faces == 3) corner_load = std::max(corner_load, part.load);
+    if (faces <= 1) inner_load = std::min(inner_load, part.load);
+  }
+  EXPECT_LT(aware.max_cost(), 0.97 * plain_worst);
+  ASSERT_GT(corner_load, 0);
+  ASSERT_LT(inner_load, 1e300);
+  EXPECT_LT(inner_load, 0.8 * corner_load);
+  EXPECT_GT(aware.imbalance(), plain.imbalance());  // the loads alone are less even, by design
+
+  const auto doc = nlohmann::json::parse(partition::to_json(aware, "s.json"));
+  EXPECT_EQ(doc["summary"]["ghost_cells"], 4);
+  EXPECT_EQ(doc["summary"]["max_cost"].get<double>(), aware.max_cost());
+  EXPECT_TRUE(doc["parts"][0].contains("cost"));
+  EXPECT_FALSE(nlohmann::json::parse(partition::to_json(plain, "s.json"))["parts"][0].contains("cost"));
+
+  // A periodic scene's ghost wraps: its boxes balance their loads only.
+  s.periodic = {true, true, true};
+  const auto wrapped = partition::partition_domain(s, 8, ghost_options);
+  EXPECT_EQ(wrapped.ghost_weight, 0.0);
+  for (const auto& part : wrapped.parts) EXPECT_EQ(part.cost, part.load);
+}
+
 TEST(Partition, JsonIsCompleteAndDeterministic) {
   const SceneDesc s = clustered_scene();
   const auto a = partition::partition_domain(s, 6), b = partition::partition_domain(s, 6);
