@@ -210,10 +210,11 @@ void take_figures(const Comm& comm, MeshRun<Dim>& run) {
       if (!run.streamed) add_phase_figures(piece, run.mesh.phases, run.phase_figures);
       run.phase_figures.resize(run.mesh.phases.size());
       for (PhaseFigures& f : run.phase_figures) f = {comm.allreduce_sum(f.elements), comm.allreduce_sum(f.measure)};
+      // In this phase as a streamed run's partitions add theirs (add_figures): a pass over
+      // every cell (E4 at 40 µm: 0.12 s of 3.1, uncounted in any phase before).
+      run.checksum = run.streamed ? parallel::sum_over_ranks(comm, run.checksum) : parallel::mesh_checksum(comm, piece);
     }
   }
-  if (run.options.figures)
-    run.checksum = run.streamed ? parallel::sum_over_ranks(comm, run.checksum) : parallel::mesh_checksum(comm, piece);
   if (run.options.pipeline.cohesive) {  // per phase pair (lower, upper), over every rank
     const std::vector<geometry::Phase>& phases = run.mesh.phases;
     const auto index = [&](std::int32_t id) {
