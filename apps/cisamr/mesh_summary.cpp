@@ -48,16 +48,13 @@ void print_mesh_summary(std::FILE* out, const driver::MeshRun<Dim>& run, const d
                  static_cast<double>(run.peak_rss_bytes.max) / (1024.0 * 1024.0), per_element,
                  Dim == 2 ? "triangle" : "tetrahedron");
     if (run.distributed) {
-      double max_load = 0, sum_load = 0, max_cost = 0, sum_cost = 0;
-      for (const auto& p : run.mesh.partitions)
-        max_load = std::max(max_load, p.load), sum_load += p.load, max_cost = std::max(max_cost, p.cost), sum_cost += p.cost;
-      const double mean_load = sum_load / static_cast<double>(run.mesh.partitions.size());
-      const double mean_cost = sum_cost / static_cast<double>(run.mesh.partitions.size());
-      std::fprintf(out, "  partition loads: max %.4g, mean %.4g, imbalance %.3f (%s)\n", max_load, mean_load,
-                  mean_load > 0 ? max_load / mean_load : 1.0, run.mesh.partition_method.c_str());
-      if (max_cost != max_load || sum_cost != sum_load)  // 3D: the cuts balanced load plus ghost
-        std::fprintf(out, "  partition costs (load and ghost): max %.4g, mean %.4g, imbalance %.3f\n", max_cost, mean_cost,
-                    mean_cost > 0 ? max_cost / mean_cost : 1.0);
+      const parallel::Spread load = parallel::spread_of(run.mesh.partitions, &parallel::PartitionSummary::load);
+      const parallel::Spread cost = parallel::spread_of(run.mesh.partitions, &parallel::PartitionSummary::cost);
+      std::fprintf(out, "  partition loads: max %.4g, mean %.4g, imbalance %.3f (%s)\n", load.max, load.mean,
+                  load.imbalance(), run.mesh.partition_method.c_str());
+      if (cost.max != load.max || cost.mean != load.mean)  // 3D: the cuts balanced load plus ghost
+        std::fprintf(out, "  partition costs (load and ghost): max %.4g, mean %.4g, imbalance %.3f\n", cost.max, cost.mean,
+                    cost.imbalance());
       for (const auto& p : run.mesh.partitions) {
         std::fprintf(out, "  part %3d rank %2d cells ", p.id, p.rank);
         for (int d = 0; d < Dim; ++d)

@@ -115,17 +115,14 @@ std::string report(const MeshRun<Dim>& run, const std::string& scene_path, const
   }
   j["partitions"] = parts;
   if (run.distributed) {
-    double max_load = 0, sum_load = 0, max_cost = 0, sum_cost = 0;
-    for (const auto& p : m.partitions)
-      max_load = std::max(max_load, p.load), sum_load += p.load, max_cost = std::max(max_cost, p.cost), sum_cost += p.cost;
-    const double count = static_cast<double>(std::max<std::size_t>(1, m.partitions.size()));
-    const double mean_load = sum_load / count, mean_cost = sum_cost / count;
+    const parallel::Spread load = parallel::spread_of(m.partitions, &parallel::PartitionSummary::load);
+    const parallel::Spread cost = parallel::spread_of(m.partitions, &parallel::PartitionSummary::cost);
     j["partition_method"] = m.partition_method;
     j["ghost_rule"] = ghost_rule(Dim, run.options.ghost);
     // The cuts balance the cost (the load plus, in 3D, the ghost's weighted load), so the
     // loads alone may differ more.
-    j["load"] = {{"max", max_load}, {"mean", mean_load}, {"imbalance", mean_load > 0 ? max_load / mean_load : 1.0},
-                 {"cost_max", max_cost}, {"cost_mean", mean_cost}, {"cost_imbalance", mean_cost > 0 ? max_cost / mean_cost : 1.0}};
+    j["load"] = {{"max", load.max},      {"mean", load.mean},      {"imbalance", load.imbalance()},
+                 {"cost_max", cost.max}, {"cost_mean", cost.mean}, {"cost_imbalance", cost.imbalance()}};
     j["scene_inclusions"] = m.scene_inclusions;
     if constexpr (Dim == 3)  // each STL file read by one rank, then by the ranks whose partitions need it
       j["stl_files_read"] = {{"min", run.stl_files_read.min}, {"max", run.stl_files_read.max},

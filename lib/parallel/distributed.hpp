@@ -15,6 +15,7 @@
 //   kernel    pipeline::run unchanged on each own partition
 //   merge     nodes merged by lattice identity, owners, global ids (merge.hpp)
 // Every stage ends with an agreement on errors (collective.hpp).
+#include <algorithm>
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -49,6 +50,18 @@ struct PartitionSummary {
   std::int64_t elements = 0, nodes = 0;
   double kernel_seconds = 0;      // pipeline::run
 };
+
+// The largest and the mean of one figure of the partitions (load, cost), and their ratio.
+struct Spread {
+  double max = 0, mean = 0;
+  double imbalance() const { return mean > 0 ? max / mean : 1.0; }
+};
+inline Spread spread_of(const std::vector<PartitionSummary>& parts, double PartitionSummary::*figure) {
+  Spread s;
+  for (const PartitionSummary& p : parts) s.max = std::max(s.max, p.*figure), s.mean += p.*figure;
+  if (!parts.empty()) s.mean /= static_cast<double>(parts.size());
+  return s;
+}
 
 // What the ranks learn about the STL surfaces whose triangles the scene does not hold
 // (README.md, "Reading the scene").
