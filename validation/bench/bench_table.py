@@ -3,8 +3,9 @@
 
 Reads TAG-seq.R.json, TAG-r1-nN.R.json and TAG-r2-nN.R.json (R = 1..REPS, `cisamr mesh
 --report`), keeps per configuration the run with the median total time, and prints two
-Markdown tables: totals (with the checksum of every run compared with the sequential one)
-and phase times (min / max / mean over ranks)."""
+Markdown tables: totals (with the checksum of every run compared with the sequential one,
+the partitions' load, cost and kernel-time spreads) and phase times (min / max / mean over
+ranks)."""
 import glob
 import json
 import re
@@ -53,8 +54,9 @@ t_r1n1 = None
 print(f"Scene: {seq['scene']} ({dim}D), {seq['elements']:,} elements, checksum {ref}; "
       f"median of {reps} runs per row.\n")
 print("| run | ranks | N | total s (median; min-max) | speed-up vs sequential | efficiency | "
-      "coarse cells meshed / domain | kernel µs per meshed cell | load max/mean | peak RSS MB | checksums = sequential |")
-print("|---|---|---|---|---|---|---|---|---|---|---|")
+      "coarse cells meshed / domain | kernel µs per meshed cell | load max/mean | cost max/mean | "
+      "kernel max/mean | peak RSS MB | checksums = sequential |")
+print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
 phase_rows = []
 for name in names:
     js = runs(name)
@@ -65,7 +67,7 @@ for name in names:
     same = all(x["checksum"] == ref for x in js)
     ranks = j.get("ranks", 1)
     if name.endswith("-seq"):
-        n, meshed, per_cell, imb = "-", 1.0, None, None
+        n, meshed, per_cell, imb, cost_imb, kernel_imb = "-", 1.0, None, None, None, None
     else:
         parts = j["partitions"]
         n = len(parts)
@@ -74,6 +76,11 @@ for name in names:
         cells = sum(box(p) + p["ghost_coarse_cells"] for p in parts)
         per_cell = 1e6 * sum(p["kernel_s"] for p in parts) / cells
         imb = j["load"]["imbalance"]
+        # What the partitioner balanced (3D: the load and the ghost's; absent before
+        # 92590af) and what the partitions' kernels took: the slowest over the mean.
+        cost_imb = j["load"].get("cost_imbalance")
+        kernel = [p["kernel_s"] for p in parts]
+        kernel_imb = max(kernel) / statistics.mean(kernel) if statistics.mean(kernel) > 0 else None
         if ranks == 1 and n == 1:
             t_r1n1 = j["total_s"]
     speedup = t_seq / j["total_s"]
@@ -82,6 +89,7 @@ for name in names:
     label = name[len(tag) + 1:] + (" (busy)" if any(f"{name}.{r}" in busy for r in range(1, reps + 1)) else "")
     print(f"| {label} | {ranks} | {n} | {j['total_s']:.2f} ({min(ts):.2f}-{max(ts):.2f}) | {speedup:.2f} | {eff} | "
           f"{meshed:.2f} | {'-' if per_cell is None else f'{per_cell:.1f}'} | {'-' if imb is None else f'{imb:.2f}'} | "
+          f"{'-' if cost_imb is None else f'{cost_imb:.2f}'} | {'-' if kernel_imb is None else f'{kernel_imb:.2f}'} | "
           f"{'-' if rss is None else f'{rss:.0f}'} | {'yes' if same else 'NO'} ({len(js)}) |")
     phase_rows.append((label, j))
 
