@@ -96,7 +96,7 @@ void add_partition_command(CLI::App& app, GlobalFlags& flags, int& exit_code) {
       if (p.ghost_weight > 0)  // 3D: what the cuts balanced
         std::fprintf(summary, "  cost (load and %.2f x the load of a %lld-cell ghost): max %.6g, mean %.6g, max/mean %.4f\n",
                      p.ghost_weight, static_cast<long long>(p.ghost_cells), p.max_cost(), p.mean_cost(),
-                     p.mean_cost() > 0 ? p.max_cost() / p.mean_cost() : 1.0);
+                     p.cost_imbalance());
       if (args->compare_uniform) {
         const auto t1 = std::chrono::steady_clock::now();
         const partition::Partition u = partition::uniform_grid_partition(scene, args->n, options);

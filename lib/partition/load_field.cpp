@@ -265,9 +265,9 @@ void add_inclusion(Accumulator& acc, const Inclusion& inc, double weight, double
 
 }  // namespace
 
-int effective_levels(const SceneDesc& scene, const Inclusion& inc) {
-  return std::max(1, inc.levels > 0 ? inc.levels : scene.levels);
-}
+int requested_levels(const SceneDesc& scene, const Inclusion& inc) { return inc.levels > 0 ? inc.levels : scene.levels; }
+
+int effective_levels(const SceneDesc& scene, const Inclusion& inc) { return std::max(1, requested_levels(scene, inc)); }
 
 Box3 inclusion_box(const Shape& shape) { return shape_holding_box(shape); }
 
@@ -323,7 +323,7 @@ LoadField empty_field(const SceneDesc& scene, const PartitionOptions& options, d
   const auto& widths = options.ghost_cells_at_level;
   if (!widths.empty() && options.ghost_weight > 0 && !f.any_periodic() && !scene.inclusions.empty()) {
     int coarsest = std::numeric_limits<int>::max();
-    for (const Inclusion& inc : scene.inclusions) coarsest = std::min(coarsest, inc.levels > 0 ? inc.levels : scene.levels);
+    for (const Inclusion& inc : scene.inclusions) coarsest = std::min(coarsest, requested_levels(scene, inc));
     f.ghost_cells = widths[static_cast<std::size_t>(std::clamp<int>(coarsest, 0, static_cast<int>(widths.size()) - 1))];
     f.ghost_raster = (f.ghost_cells + f.coarsen - 1) / f.coarsen;
     f.ghost_weight = options.ghost_weight;

@@ -50,7 +50,9 @@ struct LoadField {
 LoadField build_load_field(const geometry::SceneDesc& scene, const PartitionOptions& options,
                            std::span<const InclusionLoad> given = {});
 
-// Levels R_k used for an inclusion (its own, else the scene's; at least 1: an inclusion
+// Levels an inclusion asks for: its own, else the scene's.
+int requested_levels(const geometry::SceneDesc& scene, const geometry::Inclusion& inc);
+// Levels R_k used for an inclusion's load (requested_levels, at least 1: an inclusion
 // without refinement still costs its cut elements).
 int effective_levels(const geometry::SceneDesc& scene, const geometry::Inclusion& inc);
 

@@ -20,7 +20,7 @@ struct PartitionOptions {
   enum class Method { best, merge, bisection };
   Method method = Method::best;
   int oversubscription = 8;         // the over-decomposition has at least this × n leaves
-  int extra_depths = 2;             // also try this many finer over-decompositions, keep the best
+  int extra_depths = 2;             // also try this many finer over-decompositions (below 512 leaves per part), keep the best
   double load_exponent = 0;         // M in R^M·|A|; 0 = the paper's 1 (2D) or 1.5 (3D)
   bool rebalance = true;            // after merging, slide shared faces to lower the max load
   std::int64_t max_load_cells = std::int64_t{1} << 23;  // load raster; coarser lattice above this
@@ -77,6 +77,7 @@ struct Partition {
   double max_cost() const;
   double mean_cost() const;
   double imbalance() const { return mean_load() > 0 ? max_load() / mean_load() : 1.0; }
+  double cost_imbalance() const { return mean_cost() > 0 ? max_cost() / mean_cost() : 1.0; }
   // Σ of the shared (internal) face measures, each face once: lengths in 2D, areas in 3D.
   double shared_face_measure() const;
 };
