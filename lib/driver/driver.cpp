@@ -313,7 +313,8 @@ std::variant<MeshRun<2>, MeshRun<3>> mesh_scene(const Comm& comm, const std::str
         parallel::MeshOptions o{.pipeline = run.options.pipeline,
                                 .partitions = run.options.partitions > 0 ? run.options.partitions : comm.size(),
                                 .partitioning = {},
-                                .ghost = options.ghost};
+                                .ghost = options.ghost,
+                                .exchange_near_faces = options.exchange_near_faces};
         if (run.options.stream.empty()) {
           run.mesh = parallel::mesh_distributed<Dim>(comm, std::move(scene), o);
         } else {
@@ -433,12 +434,13 @@ void finish(const Comm& comm, MeshRun<Dim>& run) {
   // A distributed run reports every phase (the same list on every rank); a sequential one
   // the phases it ran.
   static const std::vector<std::string> kPhases = {"read",      "partition", "ghost",  "oracle",
-                                                   "samr",      "radapt",    "faceswap", "subdivide",
+                                                   "samr",      "radapt",    "exchange", "faceswap", "subdivide",
                                                    "assemble",  "cohesive",  "merge",   "quality", "periodic",
                                                    "write",     "total"};
   std::vector<std::string> names;
   for (const std::string& name : kPhases)
-    if ((run.distributed && (name != "periodic" || run.any_periodic()) && (name != "cohesive" || run.options.pipeline.cohesive)) ||
+    if ((run.distributed && (name != "periodic" || run.any_periodic()) && (name != "cohesive" || run.options.pipeline.cohesive) &&
+         (name != "exchange" || Dim == 3)) ||
         std::ranges::any_of(run.mesh.times.phases(), [&](const auto& p) { return p.first == name; }))
       names.push_back(name);
   run.timings = parallel::spread_over_ranks(comm, run.mesh.times, names);

@@ -41,6 +41,7 @@ struct Options {
   std::optional<io::MeshFormat> stream_format;
   io::PlaneKind stream_plane = io::PlaneKind::stress;
   parallel::GhostRule ghost;
+  bool exchange_near_faces = true;  // parallel::MeshOptions::exchange_near_faces (false: comparisons)
   double bound = 0;     // aspect-ratio bound of the statistics (0: 3 in 2D, 5 in 3D)
   bool figures = true;  // per-phase counts and measures, checksum (a pass and a sort over the cells)
   // A scene whose mesh pipeline::estimate_mesh puts above this many elements is refused

@@ -13,6 +13,7 @@
 #include "parallel/cohesive.hpp"
 #include "parallel/collective.hpp"
 #include "parallel/exchange.hpp"
+#include "parallel/near_faces.hpp"
 #include "geometry/periodic.hpp"
 #include "pipeline/effective_levels.hpp"
 
@@ -299,6 +300,8 @@ DistributedMesh<Dim> mesh_partitions(const Comm& comm, geometry::SceneDesc scene
 
   // Ghost regions of this rank's partitions, and the inclusions they need.
   const auto [first, last] = partitions_of_rank(n, ranks, rank);
+  GhostRule rule = options.ghost;
+  rule.exchange = Dim == 3 && options.exchange_near_faces;
   grid::Lattice<Dim> lattice;
   std::vector<int> levels;  // rule R1's level per scene inclusion
   std::vector<GhostRegion<Dim>> regions;
@@ -323,7 +326,7 @@ DistributedMesh<Dim> mesh_partitions(const Comm& comm, geometry::SceneDesc scene
         if constexpr (Dim == 2)
           regions.push_back(ghost_region<2>(index, lattice, box, options.ghost));
         else
-          regions.push_back(ghost_region3(index, lattice, box, options.ghost, levels));
+          regions.push_back(ghost_region3(index, lattice, box, rule, levels));
         out.loaded_inclusions.insert(out.loaded_inclusions.end(), regions.back().inclusions.begin(),
                                      regions.back().inclusions.end());
       }
@@ -350,59 +353,120 @@ DistributedMesh<Dim> mesh_partitions(const Comm& comm, geometry::SceneDesc scene
   // The unchanged sequential kernel on each partition, with an oracle built from exactly
   // that partition's inclusions: its output (order included) is then the same whatever
   // the other partitions of its rank, so the gathered file does not depend on the ranks.
+  // With the decisions near faces exchanged (3D, GhostRule::exchange) it runs in two halves:
+  // SAMR and r-adaptivity on every partition of the rank, the exchange, then the rest.
+  const bool exchange = Dim == 3 && exchanges_near_faces(rule, lattice.any_periodic());
+  const int count = last - first;
   std::vector<PartitionSummary> mine;
   pipeline::Counters<Dim> local;
-  // Progress: the kernel as one phase, advanced per partition and within it by its stages.
+  // Progress: the kernel as one phase, advanced per partition and within it by its stages
+  // (per half when it runs in two).
   std::optional<PartitionProgress> partition_progress;
-  if (progress != nullptr) partition_progress.emplace(*progress, last - first, pipeline::kRunPhases<Dim>);
+  if (progress != nullptr)
+    partition_progress.emplace(*progress, exchange ? 2 * count : count, exchange ? 3 : pipeline::kRunPhases<Dim>);
   pipeline::Options kernel_options = options.pipeline;
   kernel_options.progress = partition_progress ? &*partition_progress : nullptr;
   out.times.progress = nullptr;
   begin_phase(progress, "kernel");
-  run_collectively(comm, [&] {
-    for (int p = first; p < last; ++p) {
-      if (partition_progress) partition_progress->start_partition(p - first);
-      const GhostRegion<Dim>& region = regions[static_cast<std::size_t>(p - first)];
-      std::unique_ptr<Oracle> oracle;
+  std::vector<std::unique_ptr<Oracle>> oracles(static_cast<std::size_t>(count));
+  std::vector<std::vector<int>> region_levels(static_cast<std::size_t>(count));
+  std::vector<double> kernel_seconds(static_cast<std::size_t>(count), 0.0);
+  const auto prepare = [&](int p) {
+    const GhostRegion<Dim>& region = regions[static_cast<std::size_t>(p - first)];
+    ScopedPhase timer(&out.times, "oracle");
+    std::vector<std::int32_t> local_index;  // positions in `needed`
+    for (std::int32_t k : region.inclusions)
+      local_index.push_back(static_cast<std::int32_t>(
+          std::lower_bound(out.loaded_inclusions.begin(), out.loaded_inclusions.end(), k) -
+          out.loaded_inclusions.begin()));
+    // (A subset scene names its inclusions as the scene file does.)
+    oracles[static_cast<std::size_t>(p - first)] = std::make_unique<Oracle>(subset_scene(needed, local_index));
+    for (std::int32_t k : region.inclusions)
+      region_levels[static_cast<std::size_t>(p - first)].push_back(levels[static_cast<std::size_t>(k)]);
+  };
+  const auto deliver = [&](int p, pipeline::Result<Dim>&& result) {
+    const GhostRegion<Dim>& region = regions[static_cast<std::size_t>(p - first)];
+    PartitionOutput<Dim> o{p, region.box, std::move(result)};
+    std::int64_t box_cells = 1;
+    for (int d = 0; d < Dim; ++d) box_cells *= region.box.count(d);
+    PartitionSummary s;
+    s.id = p;
+    s.rank = rank;
+    s.kernel_seconds = kernel_seconds[static_cast<std::size_t>(p - first)];
+    for (int d = 0; d < Dim; ++d) s.lattice_min[d] = region.box.lo[d], s.lattice_max[d] = region.box.hi[d];
+    s.load = boxes[static_cast<std::size_t>(p)].load;
+    s.cost = boxes[static_cast<std::size_t>(p)].cost;
+    s.ghost = region.ghost;
+    s.ghost_cells = o.result.counters.coarse_cells - box_cells;
+    s.inclusions = static_cast<std::int64_t>(region.inclusions.size());
+    s.elements = static_cast<std::int64_t>(o.result.mesh.cell_count());
+    s.nodes = static_cast<std::int64_t>(o.result.mesh.node_count());
+    for (const auto& [name, sec] : o.result.times.phases()) out.times.add(name, sec);
+    // The box's coarse cells only (the partitions tile the domain); ghost work is in
+    // the other counters and in the summary.
+    o.result.counters.coarse_cells = box_cells;
+    pipeline::accumulate(local, o.result.counters);
+    mine.push_back(s);
+    oracles[static_cast<std::size_t>(p - first)].reset();
+    sink(o, lattice);
+  };
+  if constexpr (Dim == 3) {
+    if (exchange) {
+      std::vector<pipeline::Snapped3> snapped;
+      snapped.reserve(static_cast<std::size_t>(count));
+      run_collectively(comm, [&] {
+        for (int p = first; p < last; ++p) {
+          if (partition_progress) partition_progress->start_partition(p - first);
+          prepare(p);
+          const auto t0 = std::chrono::steady_clock::now();
+          const GhostRegion3& region = regions[static_cast<std::size_t>(p - first)];
+          snapped.push_back(pipeline::snap3(*oracles[static_cast<std::size_t>(p - first)], lattice, region.box,
+                                            kernel_ghost(region), kernel_options,
+                                            region_levels[static_cast<std::size_t>(p - first)]));
+          kernel_seconds[static_cast<std::size_t>(p - first)] = seconds_since(t0);
+        }
+      });
       {
-        ScopedPhase timer(&out.times, "oracle");
-        std::vector<std::int32_t> local_index;  // positions in `needed`
-        for (std::int32_t k : region.inclusions)
-          local_index.push_back(static_cast<std::int32_t>(
-              std::lower_bound(out.loaded_inclusions.begin(), out.loaded_inclusions.end(), k) -
-              out.loaded_inclusions.begin()));
-        // (A subset scene names its inclusions as the scene file does.)
-        oracle = std::make_unique<Oracle>(subset_scene(needed, local_index));
+        ScopedPhase timer(&out.times, "exchange");
+        std::vector<grid::CellRange<3>> all_boxes(boxes.size());
+        for (std::size_t q = 0; q < boxes.size(); ++q)
+          for (int d = 0; d < 3; ++d) all_boxes[q].lo[d] = boxes[q].lo[d], all_boxes[q].hi[d] = boxes[q].hi[d];
+        std::vector<SnappedPartition> waiting;
+        for (int p = first; p < last; ++p)
+          waiting.push_back({p, regions[static_cast<std::size_t>(p - first)].exchange, &snapped[static_cast<std::size_t>(p - first)]});
+        out.exchanged_nodes = comm.allreduce_sum(exchange_near_faces(comm, lattice, all_boxes, waiting));
+        out.near_faces_exchanged = true;
       }
-      const auto t0 = std::chrono::steady_clock::now();
-      std::vector<int> region_levels;
-      for (std::int32_t k : region.inclusions) region_levels.push_back(levels[static_cast<std::size_t>(k)]);
-      PartitionOutput<Dim> o{
-          p, region.box, pipeline::run(*oracle, lattice, region.box, kernel_ghost(region), kernel_options, p, region_levels)};
-      std::int64_t box_cells = 1;
-      for (int d = 0; d < Dim; ++d) box_cells *= region.box.count(d);
-      PartitionSummary s;
-      s.id = p;
-      s.rank = rank;
-      s.kernel_seconds = seconds_since(t0);
-      for (int d = 0; d < Dim; ++d) s.lattice_min[d] = region.box.lo[d], s.lattice_max[d] = region.box.hi[d];
-      s.load = boxes[static_cast<std::size_t>(p)].load;
-      s.cost = boxes[static_cast<std::size_t>(p)].cost;
-      s.ghost = region.ghost;
-      s.ghost_cells = o.result.counters.coarse_cells - box_cells;
-      s.inclusions = static_cast<std::int64_t>(region.inclusions.size());
-      s.elements = static_cast<std::int64_t>(o.result.mesh.cell_count());
-      s.nodes = static_cast<std::int64_t>(o.result.mesh.node_count());
-      for (const auto& [name, sec] : o.result.times.phases()) out.times.add(name, sec);
-      // The box's coarse cells only (the partitions tile the domain); ghost work is in
-      // the other counters and in the summary.
-      o.result.counters.coarse_cells = box_cells;
-      pipeline::accumulate(local, o.result.counters);
-      mine.push_back(s);
-      sink(o, lattice);
+      run_collectively(comm, [&] {
+        for (int p = first; p < last; ++p) {
+          if (partition_progress) partition_progress->start_partition(count + p - first);
+          const auto t0 = std::chrono::steady_clock::now();
+          const GhostRegion3& region = regions[static_cast<std::size_t>(p - first)];
+          pipeline::Result<3> result =
+              pipeline::finish3(*oracles[static_cast<std::size_t>(p - first)], lattice, region.box, kernel_ghost(region),
+                                kernel_options, p, std::move(snapped[static_cast<std::size_t>(p - first)]));
+          kernel_seconds[static_cast<std::size_t>(p - first)] += seconds_since(t0);
+          deliver(p, std::move(result));
+        }
+        if (partition_progress) partition_progress->finish();
+      });
     }
-    if (partition_progress) partition_progress->finish();
-  });
+  }
+  if (!exchange)
+    run_collectively(comm, [&] {
+      for (int p = first; p < last; ++p) {
+        if (partition_progress) partition_progress->start_partition(p - first);
+        prepare(p);
+        const auto t0 = std::chrono::steady_clock::now();
+        const GhostRegion<Dim>& region = regions[static_cast<std::size_t>(p - first)];
+        pipeline::Result<Dim> result = pipeline::run(*oracles[static_cast<std::size_t>(p - first)], lattice, region.box,
+                                                     kernel_ghost(region), kernel_options, p,
+                                                     region_levels[static_cast<std::size_t>(p - first)]);
+        kernel_seconds[static_cast<std::size_t>(p - first)] = seconds_since(t0);
+        deliver(p, std::move(result));
+      }
+      if (partition_progress) partition_progress->finish();
+    });
   out.times.progress = progress;
 
   // Counters over all ranks. (leaves/refinements/... count ghost work too: they say what

@@ -204,9 +204,10 @@ GhostRegion<Dim> grow(const InclusionIndex<Dim>& index, const grid::Lattice<Dim>
 
 }  // namespace
 
-int ghost_margin3(int level, int max_level) {
+int ghost_margin3(int level, int max_level, bool exchanged) {
   const double samr_reach = samr::reach_coarse_cells3(max_level);
-  return static_cast<int>(std::floor(samr_reach + std::ldexp(kKernelReach3, -std::max(0, level)))) + 1;
+  const double kernel_reach = exchanged ? kExchangedKernelReach3 : kKernelReach3;
+  return static_cast<int>(std::floor(samr_reach + std::ldexp(kernel_reach, -std::max(0, level)))) + 1;
 }
 
 partition::PartitionOptions ghost_aware(partition::PartitionOptions options, int dimension, const GhostRule& rule) {
@@ -245,7 +246,8 @@ GhostRegion3 ghost_region3(const InclusionIndex3& index, const grid::Lattice<3>&
     return coarsest;
   };
   const int coarsest = coarsest_of(widest.inclusions);
-  const auto margin_of = [&](int level) { return level < 0 ? 1 : ghost_margin3(level, lattice.max_level); };
+  const bool exchange = exchanges_near_faces(rule, lattice.any_periodic());
+  const auto margin_of = [&](int level) { return level < 0 ? 1 : ghost_margin3(level, lattice.max_level, exchange); };
   const bool forced = rule.margin3_cubes > 0;
   const bool closure = rule.max_closure_rounds != 0;
   // Each face its own margin (issue #15: "derive it per box face from what actually lies
@@ -286,12 +288,15 @@ GhostRegion3 ghost_region3(const InclusionIndex3& index, const grid::Lattice<3>&
       const double cells = forced > 0 ? forced : derived;
       return static_cast<std::int64_t>(std::ceil(cells * static_cast<double>(lattice.units(std::min(coarsest, lattice.max_level)))));
     };
-    region.radapt_reach = reach(rule.radapt_window_cells3, kRadaptWindow3);
+    region.radapt_reach = reach(rule.radapt_window_cells3, exchange ? kExchangedRadaptWindow3 : kRadaptWindow3);
     region.swap_reach = reach(rule.swap_window3_cells(), kSwapWindow3);
     // Forced windows (comparisons) run the guard on all of r-adaptivity's, as before.
     const bool forced = rule.radapt_window_cells3 != 0 || rule.swap_window_cells3 != 0;
-    region.first_pass_reach = forced ? region.radapt_reach : reach(0, kFirstPassWindow3);
-    region.second_pass_reach = forced ? region.radapt_reach : reach(0, kSecondPassWindow3);
+    region.first_pass_reach =
+        forced ? region.radapt_reach : reach(0, exchange ? kExchangedFirstPassWindow3 : kFirstPassWindow3);
+    region.second_pass_reach =
+        forced ? region.radapt_reach : reach(0, exchange ? kExchangedSecondPassWindow3 : kSecondPassWindow3);
+    region.exchange = exchange;
   }
   return region;
 }

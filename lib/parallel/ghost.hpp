@@ -67,13 +67,29 @@ inline constexpr int kFirstPassWindow3 = faceswap::kCompetitorCells3 + radapt::k
 inline constexpr int kSecondPassWindow3 = faceswap::kCompetitorCells3 + radapt::kSecondPassCells3 - 1;
 static_assert(kSwapWindow3 == 1 && kRadaptWindow3 == 4 && kFirstPassWindow3 == 3 && kSecondPassWindow3 == 2);
 
+// The same with the decisions near faces exchanged (GhostRule::exchange, README.md, "Decisions
+// exchanged near faces"): after r-adaptivity each partition takes the final position, mask
+// and state of every node outside its closed box from a partition whose closed box holds
+// it, which decided it from its own data. The positions a decision in the box reads beyond
+// it are then exchanged ones; what the partition must decide itself are the nodes of its
+// closed box (0 cells out instead of kCompetitorCells3), and the forest must be right where
+// r-adaptivity builds their options (radapt::kReachCells3) and where face swapping's
+// competitors lie (faceswap::kCompetitorCells3).
+inline constexpr int kExchangedRadaptWindow3 = radapt::kReachCells3 - 1;
+inline constexpr int kExchangedFirstPassWindow3 = radapt::kFirstPassCells3 - 1;
+inline constexpr int kExchangedSecondPassWindow3 = radapt::kSecondPassCells3 - 1;
+inline constexpr double kExchangedKernelReach3 = std::max(radapt::kReachCells3, faceswap::kCompetitorCells3);
+static_assert(kExchangedRadaptWindow3 == 2 && kExchangedFirstPassWindow3 == 1 && kExchangedSecondPassWindow3 == 0 &&
+              kExchangedKernelReach3 == 3);
+
 // Coarse cubes of ghost a 3D box needs when the coarsest effective level among the
 // inclusions near it is `level` and the lattice's finest is `max_level`: the least whole
 // number greater than samr::reach_coarse_cells3(max_level) + kKernelReach3 / 2^level (greater:
 // the first layer's far face may hold midpoints the partition lacks), the kernel's reach
 // counted in cells of its level (level 2: 1 + 1.25 → 3): 7 at level 0, 4 at level 1, 3 at
-// level 2, 2 from level 3 on; 6 when nothing refines (Lmax 0).
-int ghost_margin3(int level, int max_level = 64);
+// level 2, 2 from level 3 on; 6 when nothing refines (Lmax 0). With the decisions near faces
+// exchanged (kExchangedKernelReach3): 5, 3, 2, 2; 4 when nothing refines.
+int ghost_margin3(int level, int max_level = 64, bool exchanged = false);
 
 struct GhostRule {
   // 2D: margin around every inclusion's bounding box. Level-aware (default):
@@ -111,7 +127,19 @@ struct GhostRule {
   // a few coarse cells of it (README.md, "Ghost region"). -1: the full closure, for
   // comparison.
   int max_closure_rounds = 0;
+  // 3D: the caller exchanges the decisions near faces after r-adaptivity (README.md,
+  // "Decisions exchanged near faces"), so the margins and windows are the narrower
+  // kExchanged* ones. In effect only where exchanges_near_faces() says so: not with a forced
+  // margin, windows or closure rounds (comparisons keep their meaning), not on a periodic
+  // lattice (its windows are the whole ghost).
+  bool exchange = false;
 };
+
+// Whether a 3D run with this rule exchanges its decisions near faces.
+inline bool exchanges_near_faces(const GhostRule& rule, bool periodic) {
+  return rule.exchange && !periodic && rule.margin3_cubes == 0 && rule.radapt_window_cells3 == 0 &&
+         rule.swap_window_cells3 == 0 && rule.max_closure_rounds == 0;
+}
 
 // What a cube of 3D ghost costs the partitioner, as a fraction of a box cube's work: SAMR
 // refines the whole margin, r-adaptivity works on its inner cells only (kRadaptWindow3),
@@ -179,6 +207,10 @@ struct GhostRegion {
   // 3D: r-adaptivity's, its guard's passes' and face swapping's windows, fine lattice units
   // (-1: every leaf).
   std::int64_t radapt_reach = -1, swap_reach = -1, first_pass_reach = -1, second_pass_reach = -1;
+  // 3D: the margins and windows count on the decisions near faces being exchanged
+  // (exchanges_near_faces); the kernel must then be run as pipeline::snap3, the exchange,
+  // pipeline::finish3.
+  bool exchange = false;
   std::vector<std::int32_t> inclusions;  // scene indices, ascending
 };
 template <int Dim>

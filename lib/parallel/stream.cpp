@@ -331,8 +331,11 @@ DistributedMesh<Dim> mesh_streamed(const Comm& comm, geometry::SceneDesc scene, 
   std::vector<io::MshPartSummary> summaries;
   PhaseTimes spooling;
   const std::vector<geometry::Phase> phases = scene.phases;
+  // One partition held at a time: its decisions near faces are recomputed, not exchanged.
+  MeshOptions one_at_a_time = options;
+  one_at_a_time.exchange_near_faces = false;
   DistributedMesh<Dim> out =
-      mesh_partitions<Dim>(comm, std::move(scene), options, [&](PartitionOutput<Dim>& o, const grid::Lattice<Dim>& lattice) {
+      mesh_partitions<Dim>(comm, std::move(scene), one_at_a_time, [&](PartitionOutput<Dim>& o, const grid::Lattice<Dim>& lattice) {
         mesh::SimplexMesh<Dim>& m = o.result.mesh;
         io::MeshWriteOptions piece_options = write_options;
         // The driver's figures, outside the write phase's time (a .vtu piece takes their ratios).

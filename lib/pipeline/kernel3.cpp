@@ -3,20 +3,22 @@
 #include "core/memory.hpp"
 #include "faceswap/faceswap3.hpp"
 #include "pipeline/assembly.hpp"
-#include "radapt/radapt3.hpp"
-#include "samr/samr3.hpp"
+#include "pipeline/staged3.hpp"
 #include "subdivide/subdivide3.hpp"
 
 namespace cisamr::pipeline {
+namespace {
 
-// Runs the stages and returns what the mesh is made of. Their working state (the forest,
-// the snapping state, the swaps) is released on return, before the mesh is built, so that
-// it does not add to the peak (validation/paper3/README.md, memory).
-MeshParts<3> run_stages(const geometry::Oracle3& oracle, const grid::Lattice3& lattice, const grid::CellRange<3>& box,
-                        const Ghost& ghost, const Options& options, std::span<const int> levels, Result<3>& result) {
+grid::LeafWindow window_of(const grid::Lattice3& lattice, const grid::CellRange<3>& box, std::int64_t reach) {
+  return grid::LeafWindow::around(lattice, box, reach);
+}
+
+// SAMR and r-adaptivity, their times and counters added to `result`.
+Snapped3 snap_stages(const geometry::Oracle3& oracle, const grid::Lattice3& lattice, const grid::CellRange<3>& box,
+                     const Ghost& ghost, const Options& options, std::span<const int> levels, Result<3> result) {
   Counters<3>& counters = result.counters;
   const grid::CellRange<3> range = ghosted_range(lattice, box, ghost.sides);
-  const auto window = [&](std::int64_t reach) { return grid::LeafWindow::around(lattice, box, reach); };
+  const auto window = [&](std::int64_t reach) { return window_of(lattice, box, reach); };
   samr::RefinedGrid3 grid = [&] {
     ScopedPhase timer(&result.times, "samr");
     return samr::refine3(oracle, lattice, range, levels, options.progress);
@@ -54,11 +56,20 @@ MeshParts<3> run_stages(const geometry::Oracle3& oracle, const grid::Lattice3& l
   counters.guarded_leaves = nodes.guarded_leaves;
   counters.guard_combinations = nodes.combinations;
   counters.missing_crossings = nodes.missing_crossings;
+  return Snapped3{std::move(grid), std::move(nodes), std::move(result)};
+}
 
+// Face swapping and subdivision; returns what the mesh is made of. The working state (the
+// forest, the snapping state, the swaps) is released on return, before the mesh is built,
+// so that it does not add to the peak (validation/paper3/README.md, memory).
+MeshParts<3> finish_stages(const geometry::Oracle3& oracle, const grid::Lattice3& lattice, const grid::CellRange<3>& box,
+                           const Ghost& ghost, const Options& options, samr::RefinedGrid3 grid, radapt::Nodes3 nodes,
+                           Result<3>& result) {
+  Counters<3>& counters = result.counters;
   const faceswap::Swaps3 swaps = [&] {
     ScopedPhase timer(&result.times, "faceswap");
     return faceswap::swap3(oracle, grid, nodes, faceswap::Options3{.trigger = options.swap_trigger3,
-                                                                      .window = window(ghost.swap_reach),
+                                                                      .window = window_of(lattice, box, ghost.swap_reach),
                                                                       .progress = options.progress});
   }();
   release_free_memory();
@@ -83,6 +94,35 @@ MeshParts<3> run_stages(const geometry::Oracle3& oracle, const grid::Lattice3& l
   counters.split_above_5 = tets.split_above_5;
   return {std::move(nodes.key),  std::move(nodes.position), std::move(tets.extra_points),
           std::move(tets.extra_identity), std::move(tets.tets), std::move(tets.phase)};
+}
+
+}  // namespace
+
+MeshParts<3> run_stages(const geometry::Oracle3& oracle, const grid::Lattice3& lattice, const grid::CellRange<3>& box,
+                        const Ghost& ghost, const Options& options, std::span<const int> levels, Result<3>& result) {
+  Snapped3 snapped = snap_stages(oracle, lattice, box, ghost, options, levels, std::move(result));
+  result = std::move(snapped.result);
+  return finish_stages(oracle, lattice, box, ghost, options, std::move(snapped.grid), std::move(snapped.nodes), result);
+}
+
+Snapped3 snap3(const geometry::Oracle3& oracle, const grid::Lattice<3>& lattice, const grid::CellRange<3>& box,
+               const Ghost& ghost, const Options& options, std::span<const int> levels) {
+  Result<3> result;
+  result.times.progress = options.progress;
+  return snap_stages(oracle, lattice, box, ghost, options, levels, std::move(result));
+}
+
+Result<3> finish3(const geometry::Oracle3& oracle, const grid::Lattice<3>& lattice, const grid::CellRange<3>& box,
+                  const Ghost& ghost, const Options& options, int partition_id, Snapped3&& snapped) {
+  Result<3> result = std::move(snapped.result);
+  result.times.progress = options.progress;
+  MeshParts<3> parts =
+      finish_stages(oracle, lattice, box, ghost, options, std::move(snapped.grid), std::move(snapped.nodes), result);
+  {
+    ScopedPhase timer(&result.times, "assemble");
+    assemble(oracle.scene(), std::move(parts), partition_id, result);
+  }
+  return result;
 }
 
 }  // namespace cisamr::pipeline

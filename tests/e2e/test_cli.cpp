@@ -360,6 +360,38 @@ TEST_F(Cli, PartitionGivesTheBoxesTheMesherMeshes) {
   EXPECT_GT(meshed["load"]["cost_max"].get<double>(), meshed["load"]["max"].get<double>());  // the ghost counts
 }
 
+// An in-memory 3D run exchanges the decisions near its boxes' faces, a streamed one and a
+// --no-ghost-exchange one recompute them in a wider ghost: the same mesh, and the report
+// says which (with the exchange's nodes and time).
+TEST_F(Cli, ReportSaysWhetherTheDecisionsNearFacesWereExchanged) {
+  const std::string scene = std::string(CISAMR_SOURCE_DIR) + "/data/examples/spheres3d.json";
+  const auto report_of = [&](const std::string& name, const std::string& extra) {
+    const fs::path report = dir / (name + ".json");
+    const CommandResult r = run("mesh " + scene + " -o " + (dir / (name + ".pvtu")).string() +
+                                " --partitions 6 -q --report " + report.string() + extra);
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    std::ifstream in(report);
+    return nlohmann::json::parse(in);
+  };
+  const auto exchanged = report_of("exchanged", ""), streamed = report_of("streamed", " --stream"),
+             recomputed = report_of("recomputed", " --no-ghost-exchange");
+  EXPECT_EQ(exchanged["near_faces"], "exchanged");
+  EXPECT_GT(exchanged["exchanged_nodes"].get<std::int64_t>(), 0);
+  EXPECT_TRUE(exchanged["timings_s"].contains("exchange"));
+  for (const auto* j : {&streamed, &recomputed}) {
+    EXPECT_EQ((*j)["near_faces"], "recomputed");
+    EXPECT_EQ((*j)["exchanged_nodes"], 0);
+    EXPECT_EQ((*j)["checksum"], exchanged["checksum"]);
+  }
+  // The narrower ghost: fewer coarse cells meshed beyond the boxes.
+  const auto ghost_cells = [](const nlohmann::json& j) {
+    std::int64_t cells = 0;
+    for (const auto& p : j["partitions"]) cells += p["ghost_coarse_cells"].get<std::int64_t>();
+    return cells;
+  };
+  EXPECT_LT(ghost_cells(exchanged), ghost_cells(recomputed));
+}
+
 TEST_F(Cli, PeriodicReportDescribesTheTorus) {
   const fs::path scene = dir / "torus.json";
   std::ofstream(scene) << R"({"format": "cisamr-scene/1", "dimension": 2,

@@ -265,12 +265,14 @@ inline RunOutcome3 run_sequential3(const geometry::SceneDesc& scene, const pipel
 
 // Collective: every rank must call it with the same arguments.
 inline RunOutcome3 run_parallel3(const Comm& comm, const geometry::SceneDesc& scene, int partitions,
-                                 const GhostRule& rule = {}, const pipeline::Options& pipeline = {}) {
+                                 const GhostRule& rule = {}, const pipeline::Options& pipeline = {},
+                                 bool exchange_near_faces = true) {
   RunOutcome3 out;
   MeshOptions options;
   options.partitions = partitions;
   options.ghost = rule;
   options.pipeline = pipeline;
+  options.exchange_near_faces = exchange_near_faces;
   try {
     out.distributed = mesh_distributed<3>(comm, scene, options);
     out.checksum = mesh_checksum3(comm, out.distributed.piece.mesh);

@@ -19,6 +19,7 @@
 #include "parallel/output.hpp"
 #include "partition/partition.hpp"
 #include "pipeline/effective_levels.hpp"
+#include "pipeline/staged3.hpp"
 #include "samr/samr3.hpp"
 #include "scenes3.hpp"
 #include "support/cohesive_compare.hpp"
@@ -302,27 +303,36 @@ TEST(Invariance3, SixtyFourPartitions) {
 // SAMR's reach is the region's first cube whatever Lmax, and the kernel's 5 cells of the
 // level are counted as such (no safety cube since KernelReach3 tests that reach), so
 // level-1 and level-2 scenes take 4 and 3 cubes with or without extra levels (5 and 4
-// before): still the whole-domain mesh.
-TEST(Invariance3, LevelOneAndTwoTakeFourAndThreeCubes) {
+// before), and 3 and 2 with the decisions near faces exchanged (the kernel's 3 cells):
+// still the whole-domain mesh.
+TEST(Invariance3, LevelOneAndTwoTakeTheirMargins) {
   pipeline::Options no_extra;
   no_extra.extra_levels = 0;
-  const std::vector<std::pair<geometry::SceneDesc, int>> scenes{{testing::packed_scene3(12, 1, 16, 16, 12, 80), 4},
-                                                                {testing::packed_scene3(13, 2, 10, 10, 8, 30), 3}};
-  for (const auto& [scene, margin] : scenes)
+  struct Scene {
+    geometry::SceneDesc scene;
+    int margin, exchanged_margin;
+  };
+  const std::vector<Scene> scenes{{testing::packed_scene3(12, 1, 16, 16, 12, 80), 4, 3},
+                                  {testing::packed_scene3(13, 2, 10, 10, 8, 30), 3, 2}};
+  for (const auto& [scene, recomputed_margin, exchanged_margin] : scenes)
     for (const pipeline::Options& options : {pipeline::Options{}, no_extra}) {
       const testing::RunOutcome3 seq = testing::run_sequential3(scene, options);
       EXPECT_GT(seq.counters.refused_nodes, 0);
-      for (int n : {7, 27, 64}) {
-        SCOPED_TRACE("level " + std::to_string(scene.levels) + ", " + std::to_string(options.extra_levels) +
-                     " extra levels, " + std::to_string(n) + " partitions");
-        const testing::RunOutcome3 par = testing::run_parallel3(kSerial, scene, n, {}, options);
-        expect_invariant3(seq, par, scene);
-        int narrowed = 0;
-        for (const auto& p : par.distributed.partitions) {
-          EXPECT_LE(p.ghost, margin);
-          narrowed += p.ghost == margin ? 1 : 0;
+      for (const bool exchange : {false, true}) {
+        for (int n : {7, 27, 64}) {
+          SCOPED_TRACE("level " + std::to_string(scene.levels) + ", " + std::to_string(options.extra_levels) +
+                       " extra levels, " + std::to_string(n) + " partitions" + (exchange ? ", exchanged" : ""));
+          const int margin = exchange ? exchanged_margin : recomputed_margin;
+          const testing::RunOutcome3 par = testing::run_parallel3(kSerial, scene, n, {}, options, exchange);
+          EXPECT_EQ(par.distributed.exchanged_nodes > 0, exchange);
+          expect_invariant3(seq, par, scene);
+          int narrowed = 0;
+          for (const auto& p : par.distributed.partitions) {
+            EXPECT_LE(p.ghost, margin);
+            narrowed += p.ghost == margin ? 1 : 0;
+          }
+          EXPECT_GT(narrowed, 0);
         }
-        EXPECT_GT(narrowed, 0);
       }
     }
 }
@@ -519,6 +529,86 @@ TEST(KernelReach3, TheGuardOnTheBoxAloneBreaksIt) {
   EXPECT_EQ(counts.guard_on_box_differs, 1);
 }
 
+// With the decisions near faces exchanged, a partition decides only the nodes of its closed
+// box (the others come from their owners): on the whole run's forest, r-adaptivity on the
+// leaves within kExchangedRadaptWindow3 = 2 cells of the box, its guard's passes on
+// kExchangedFirstPassWindow3 = 1 and kExchangedSecondPassWindow3 = 0, gives every node of the
+// closed box the whole run's final position, mask and state. With every window on the leaves
+// touching the box only, some box's nodes differ (the comparison can fail). The same scenes
+// and boxes as KernelReach3.TheBoxReadsNothingBeyondFiveCellsOfItsLevel.
+TEST(KernelReach3, ExchangedWindowsDecideTheClosedBoxsNodes) {
+  pipeline::Options no_extra;
+  no_extra.extra_levels = 0;
+  std::vector<testing::Case3> cases = testing::invariance_cases3();
+  std::erase_if(cases, [](const testing::Case3& c) { return c.name == "periodic-level0"; });  // no exchange there
+  cases.push_back({"packed-level1-no-extra", testing::packed_scene3(12, 1, 16, 16, 12, 80), no_extra});
+  cases.push_back({"packed-level2-no-extra", testing::packed_scene3(13, 2, 10, 10, 8, 30), no_extra});
+  cases.push_back({"levels-0-and-2", testing::mixed_level_scene3(), {}});
+  int compared = 0, box_only_differs = 0;
+  std::int64_t nodes_compared = 0;
+  for (const auto& c : cases) {
+    const geometry::SceneDesc scene = testing::with_triangles(c.scene);
+    const grid::Lattice3 lattice = scene_lattice<3>(scene, c.options);
+    const std::vector<int> levels = pipeline::effective_levels3(scene, lattice, pipeline::holding_boxes(scene));
+    const geometry::Oracle3 oracle(scene);
+    const InclusionIndex3 index(scene, lattice, GhostRule{});
+    pipeline::GhostSides whole_domain{};
+    for (int d = 0; d < 3; ++d)
+      whole_domain[static_cast<std::size_t>(d)] = {static_cast<int>(lattice.coarse_cells[d]), static_cast<int>(lattice.coarse_cells[d])};
+    grid::CellRange<3> domain;
+    for (int d = 0; d < 3; ++d) domain.lo[d] = 0, domain.hi[d] = lattice.coarse_cells[d];
+    const pipeline::Snapped3 whole = pipeline::snap3(oracle, lattice, domain, pipeline::Ghost{whole_domain}, c.options, levels);
+    GhostRule exchanging;
+    exchanging.exchange = true;
+    const std::array<int, 3> split{3, 3, 2};
+    for (int b : {0, 4, 8, 13, 16}) {
+      grid::CellRange<3> box;
+      for (int d = 0, rest = b; d < 3; ++d) {
+        const int i = rest % split[static_cast<std::size_t>(d)];
+        rest /= split[static_cast<std::size_t>(d)];
+        const std::int64_t n = lattice.coarse_cells[d];
+        box.lo[d] = n * i / split[static_cast<std::size_t>(d)];
+        box.hi[d] = n * (i + 1) / split[static_cast<std::size_t>(d)];
+      }
+      const GhostRegion3 region = ghost_region3(index, lattice, box, exchanging, levels);
+      ASSERT_TRUE(region.exchange);
+      // The nodes of the closed box that differ from the whole run's (all must be there).
+      const auto differing = [&](pipeline::Ghost ghost) {
+        ghost.sides = whole_domain;
+        const pipeline::Snapped3 part = pipeline::snap3(oracle, lattice, box, ghost, c.options, levels);
+        const grid::LeafWindow closed = grid::LeafWindow::around(lattice, box, 0);
+        int differ = 0;
+        for (std::size_t n = 0; n < whole.nodes.key.size(); ++n) {
+          const grid::LatticePoint3 p = grid::key3_point(whole.nodes.key[n]);
+          bool inside = true;
+          for (int d = 0; d < 3; ++d) inside = inside && p[d] >= closed.lo[d] && p[d] <= closed.hi[d];
+          if (!inside) continue;
+          const std::int32_t m = part.nodes.id(whole.nodes.key[n]);
+          EXPECT_GE(m, 0) << c.name << ", box " << b << ": a node of the closed box missing";
+          if (m < 0) continue;
+          const auto k = static_cast<std::size_t>(m);
+          ++nodes_compared;
+          differ += part.nodes.position[k] != whole.nodes.position[n] || part.nodes.mask[k] != whole.nodes.mask[n] ||
+                            part.nodes.state[k] != whole.nodes.state[n]
+                        ? 1
+                        : 0;
+        }
+        return differ;
+      };
+      EXPECT_EQ(differing(kernel_ghost(region)), 0) << c.name << ", box " << b << ", the exchanged windows";
+      pipeline::Ghost box_only = kernel_ghost(region);
+      box_only.radapt_reach = box_only.first_pass_reach = box_only.second_pass_reach = 0;
+      box_only_differs += differing(box_only) > 0 ? 1 : 0;
+      ++compared;
+    }
+  }
+  EXPECT_EQ(compared, 8 * 5);
+  EXPECT_GT(nodes_compared, 100000);
+  EXPECT_GT(box_only_differs, 0);  // the comparison can fail
+  std::printf("%d boxes, %lld nodes compared; with every window on the box's touching leaves %d boxes differ\n", compared,
+              static_cast<long long>(nodes_compared), box_only_differs);
+}
+
 // The same over more scenes (dense level-0 ones, packed ones at levels 1-3 with and without
 // extra levels, the contact scene) and every box of the split, about 5 minutes, so not in
 // the suite: `test_parallel3 --gtest_also_run_disabled_tests --gtest_filter='*WiderSweep'`.
@@ -615,7 +705,8 @@ TEST(Invariance3, TooSmallGhostBreaksIt) {
 // whole ghost meshes. r-adaptivity's window holds the leaves whose cube starts within 4
 // cells of the box: 4 of the 7-cube ghost at level 0, 2 of 4 cubes at level 1, 1 of 3 at
 // level 2; the guard's second pass runs on 2 of those cells, and meshes what it meshes on
-// all 4.
+// all 4. With the decisions near faces exchanged the windows are 2 cells (the guard's passes
+// 1 and 0) in a narrower ghost: fewer leaves still, the same mesh.
 TEST(Invariance3, WindowsLeaveOutTheGhostsOuterPart) {
   GhostRule whole_ghost;
   whole_ghost.radapt_window_cells3 = whole_ghost.swap_window_cells3 = -1;
@@ -625,10 +716,17 @@ TEST(Invariance3, WindowsLeaveOutTheGhostsOuterPart) {
   for (const auto& c : testing::invariance_cases3()) {
     if (c.name.rfind("packed-level", 0) != 0) continue;
     SCOPED_TRACE(c.name);
-    const testing::RunOutcome3 windows = testing::run_parallel3(kSerial, c.scene, 8, {}, c.options);
+    const testing::RunOutcome3 windows = testing::run_parallel3(kSerial, c.scene, 8, {}, c.options, false);
     const testing::RunOutcome3 whole = testing::run_parallel3(kSerial, c.scene, 8, whole_ghost, c.options);
     const testing::RunOutcome3 guard_on_all = testing::run_parallel3(kSerial, c.scene, 8, guard_on_all_rule, c.options);
+    const testing::RunOutcome3 exchanged = testing::run_parallel3(kSerial, c.scene, 8, {}, c.options);
     ASSERT_FALSE(windows.failed) << windows.error;
+    ASSERT_FALSE(exchanged.failed) << exchanged.error;
+    EXPECT_EQ(exchanged.checksum, whole.checksum);
+    EXPECT_GT(exchanged.distributed.exchanged_nodes, 0);
+    EXPECT_LT(exchanged.distributed.counters.leaves, windows.distributed.counters.leaves);
+    EXPECT_LT(exchanged.distributed.counters.snapping_leaves, windows.distributed.counters.snapping_leaves);
+    EXPECT_LT(exchanged.distributed.counters.guarded_leaves, windows.distributed.counters.guarded_leaves);
     ASSERT_FALSE(whole.failed) << whole.error;
     ASSERT_FALSE(guard_on_all.failed) << guard_on_all.error;
     EXPECT_EQ(windows.checksum, whole.checksum);
