@@ -92,6 +92,14 @@ int partitions_to_stream(const geometry::SceneDesc& scene, const pipeline::MeshE
   return fewest_streamed_partitions<Dim>(scene, estimate, options, ranks, options.partitions);
 }
 
+// Whether an in-memory 3D run exchanges its decisions near faces: asked (the default), and
+// either one partition per rank (nothing more is held) or room for every partition's working
+// state (kExchangeMemoryFactor).
+bool exchange_fits(const pipeline::MeshEstimate& estimate, const Options& options, int partitions, int ranks) {
+  if (!options.exchange_near_faces) return false;
+  return partitions <= ranks || estimate.total() * kExchangeMemoryFactor <= elements_in_memory(options);
+}
+
 // Refuses, before any memory is taken, a mesh estimated above Options::max_elements, and
 // more partitions than coarse cells. Throws InputError naming the scene's field.
 template <int Dim>
@@ -310,11 +318,16 @@ std::variant<MeshRun<2>, MeshRun<3>> mesh_scene(const Comm& comm, const std::str
         run.period[d] = lattice.period(d);
       }
       if (distributed) {
+        const int partitions = run.options.partitions > 0 ? run.options.partitions : comm.size();
         parallel::MeshOptions o{.pipeline = run.options.pipeline,
-                                .partitions = run.options.partitions > 0 ? run.options.partitions : comm.size(),
+                                .partitions = partitions,
                                 .partitioning = {},
                                 .ghost = options.ghost,
-                                .exchange_near_faces = options.exchange_near_faces};
+                                .exchange_near_faces = exchange_fits(estimate, options, partitions, comm.size())};
+        if (Dim == 3 && options.exchange_near_faces && !o.exchange_near_faces && run.options.stream.empty() && run.note.empty())
+          run.note = "the mesh would have about " + about(estimate.total()) + " elements: too many to hold every one of " +
+                     std::to_string(partitions) + " partitions between the kernel's halves, so their decisions near faces "
+                     "are recomputed one partition at a time (fewer --partitions, or --max-elements, allow the exchange)";
         if (run.options.stream.empty()) {
           run.mesh = parallel::mesh_distributed<Dim>(comm, std::move(scene), o);
         } else {

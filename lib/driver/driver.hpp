@@ -64,6 +64,13 @@ inline constexpr int kStreamedPartitionsPerRank = 8;
 // in 3D: validation/bench/MEMORY.md), with a margin.
 inline constexpr double kBytesPerElement = 130;
 
+// How much more a 3D in-memory run with several partitions per rank may hold when it
+// exchanges the decisions near faces (every partition's forest and nodes held between the
+// kernel's halves): 64 partitions of spheres300 on one rank peak at 539 MB, one partition at
+// 279 MB. Where the mesh's estimate times this would not fit, the partitions recompute those
+// decisions one at a time instead (parallel::MeshOptions::exchange_near_faces).
+inline constexpr double kExchangeMemoryFactor = 2.0;
+
 // Whether `options` ask for the parallel mesher on `comm`.
 bool is_distributed(const Comm& comm, const Options& options);
 
