@@ -326,7 +326,7 @@ std::variant<MeshRun<2>, MeshRun<3>> mesh_scene(const Comm& comm, const std::str
                                 .exchange_near_faces = exchange_fits(estimate, options, partitions, comm.size())};
         if (Dim == 3 && options.exchange_near_faces && !o.exchange_near_faces && run.options.stream.empty() && run.note.empty())
           run.note = "the mesh would have about " + about(estimate.total()) + " elements: too many to hold every one of " +
-                     std::to_string(partitions) + " partitions between the kernel's halves, so their decisions near faces "
+                     std::to_string(partitions) + " partitions between the kernel's parts, so their decisions near faces "
                      "are recomputed one partition at a time (fewer --partitions, or --max-elements, allow the exchange)";
         if (run.options.stream.empty()) {
           run.mesh = parallel::mesh_distributed<Dim>(comm, std::move(scene), o);

@@ -66,7 +66,7 @@ inline constexpr double kBytesPerElement = 130;
 
 // How much more a 3D in-memory run with several partitions per rank may hold when it
 // exchanges the decisions near faces (every partition's forest and nodes held between the
-// kernel's halves): 64 partitions of spheres300 on one rank peak at 539 MB, one partition at
+// kernel's parts): 64 partitions of spheres300 on one rank peak at 481 MB, one partition at
 // 279 MB. Where the mesh's estimate times this would not fit, the partitions recompute those
 // decisions one at a time instead (parallel::MeshOptions::exchange_near_faces).
 inline constexpr double kExchangeMemoryFactor = 2.0;

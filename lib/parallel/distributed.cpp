@@ -353,14 +353,15 @@ DistributedMesh<Dim> mesh_partitions(const Comm& comm, geometry::SceneDesc scene
   // The unchanged sequential kernel on each partition, with an oracle built from exactly
   // that partition's inclusions: its output (order included) is then the same whatever
   // the other partitions of its rank, so the gathered file does not depend on the ranks.
-  // With the decisions near faces exchanged (3D, GhostRule::exchange) it runs in two halves:
-  // SAMR and r-adaptivity on every partition of the rank, the exchange, then the rest.
+  // With the decisions near faces exchanged (3D, GhostRule::exchange) it runs in parts, every
+  // partition of the rank through one before the next: SAMR and the guard's first pass, the
+  // refusals exchanged, the second pass, the decisions exchanged, then the rest.
   const bool exchange = Dim == 3 && exchanges_near_faces(rule, lattice.any_periodic());
   const int count = last - first;
   std::vector<PartitionSummary> mine;
   pipeline::Counters<Dim> local;
   // Progress: the kernel as one phase, advanced per partition and within it by its stages
-  // (per half when it runs in two).
+  // (the first and last parts when it runs in parts).
   std::optional<PartitionProgress> partition_progress;
   if (progress != nullptr)
     partition_progress.emplace(*progress, exchange ? 2 * count : count, exchange ? 3 : pipeline::kRunPhases<Dim>);
@@ -420,21 +421,34 @@ DistributedMesh<Dim> mesh_partitions(const Comm& comm, geometry::SceneDesc scene
           prepare(p);
           const auto t0 = std::chrono::steady_clock::now();
           const GhostRegion3& region = regions[static_cast<std::size_t>(p - first)];
-          snapped.push_back(pipeline::snap3(*oracles[static_cast<std::size_t>(p - first)], lattice, region.box,
-                                            kernel_ghost(region), kernel_options,
-                                            region_levels[static_cast<std::size_t>(p - first)]));
+          snapped.push_back(pipeline::snap3_first(*oracles[static_cast<std::size_t>(p - first)], lattice, region.box,
+                                                  kernel_ghost(region), kernel_options,
+                                                  region_levels[static_cast<std::size_t>(p - first)]));
           kernel_seconds[static_cast<std::size_t>(p - first)] = seconds_since(t0);
+        }
+      });
+      std::vector<grid::CellRange<3>> all_boxes(boxes.size());
+      for (std::size_t q = 0; q < boxes.size(); ++q)
+        for (int d = 0; d < 3; ++d) all_boxes[q].lo[d] = boxes[q].lo[d], all_boxes[q].hi[d] = boxes[q].hi[d];
+      std::vector<SnappedPartition> waiting;
+      for (int p = first; p < last; ++p) {
+        const GhostRegion3& region = regions[static_cast<std::size_t>(p - first)];
+        waiting.push_back({p, region.exchange, region.second_pass_reach, &snapped[static_cast<std::size_t>(p - first)]});
+      }
+      {
+        ScopedPhase timer(&out.times, "exchange");
+        out.exchanged_nodes = comm.allreduce_sum(exchange_first_pass_refusals(comm, lattice, all_boxes, waiting));
+      }
+      run_collectively(comm, [&] {
+        for (int p = first; p < last; ++p) {
+          const auto t0 = std::chrono::steady_clock::now();
+          pipeline::snap3_second(snapped[static_cast<std::size_t>(p - first)], kernel_options);
+          kernel_seconds[static_cast<std::size_t>(p - first)] += seconds_since(t0);
         }
       });
       {
         ScopedPhase timer(&out.times, "exchange");
-        std::vector<grid::CellRange<3>> all_boxes(boxes.size());
-        for (std::size_t q = 0; q < boxes.size(); ++q)
-          for (int d = 0; d < 3; ++d) all_boxes[q].lo[d] = boxes[q].lo[d], all_boxes[q].hi[d] = boxes[q].hi[d];
-        std::vector<SnappedPartition> waiting;
-        for (int p = first; p < last; ++p)
-          waiting.push_back({p, regions[static_cast<std::size_t>(p - first)].exchange, &snapped[static_cast<std::size_t>(p - first)]});
-        out.exchanged_nodes = comm.allreduce_sum(exchange_near_faces(comm, lattice, all_boxes, waiting));
+        out.exchanged_nodes += comm.allreduce_sum(exchange_decisions(comm, lattice, all_boxes, waiting));
         out.near_faces_exchanged = true;
       }
       run_collectively(comm, [&] {

@@ -39,7 +39,7 @@ struct MeshOptions {
   GhostRule ghost;
   // 3D: exchange the decisions near the boxes' faces after r-adaptivity (README.md,
   // "Decisions exchanged near faces"): a narrower ghost, but the working state of every
-  // partition of a rank is held between the kernel's halves. false: every partition
+  // partition of a rank is held between the kernel's parts. false: every partition
   // recomputes them in a wider ghost, one partition held at a time (a streamed run; comparisons).
   bool exchange_near_faces = true;
 };
@@ -109,7 +109,7 @@ struct DistributedMesh {
   std::int64_t stl_files_read = 0;  // STL files this rank read (3D): its share, then what its partitions need
   pipeline::Counters<Dim> counters;  // over all partitions of all ranks (coarse cells: the boxes')
   bool near_faces_exchanged = false;  // 3D: the decisions near faces were exchanged (MeshOptions::exchange_near_faces)
-  std::int64_t exchanged_nodes = 0;   // the node decisions taken from their owners (all ranks)
+  std::int64_t exchanged_nodes = 0;   // nodes that took their owner's refusals or decisions (all ranks, both rounds)
   PhaseTimes times;                 // this rank's phase times
 };
 using DistributedMesh2 = DistributedMesh<2>;
@@ -134,8 +134,8 @@ using PartitionSink = std::function<void(PartitionOutput<Dim>&, const grid::Latt
 // Collective. mesh_distributed up to the kernel: this rank's partitions are meshed one after
 // another (ascending ids) and each is handed to `sink` when done, so that only one is held
 // at a time (the merge or the streamed output decide what to keep). With
-// options.exchange_near_faces (3D) the kernel runs in two halves with the exchange between
-// them, and the working state of every partition of the rank is held between the halves. The result has no
+// options.exchange_near_faces (3D) the kernel runs in parts with the exchanges between
+// them, and the working state of every partition of the rank is held between the parts. The result has no
 // piece; its partitions, counters, times, phases, domain and global_cells are set.
 template <int Dim>
 DistributedMesh<Dim> mesh_partitions(const Comm& comm, geometry::SceneDesc scene, const MeshOptions& options,

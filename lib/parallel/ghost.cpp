@@ -206,8 +206,8 @@ GhostRegion<Dim> grow(const InclusionIndex<Dim>& index, const grid::Lattice<Dim>
 
 int ghost_margin3(int level, int max_level, bool exchanged) {
   const double samr_reach = samr::reach_coarse_cells3(max_level);
-  const double kernel_reach = exchanged ? kExchangedKernelReach3 : kKernelReach3;
-  return static_cast<int>(std::floor(samr_reach + std::ldexp(kernel_reach, -std::max(0, level)))) + 1;
+  if (exchanged) return static_cast<int>(std::ceil(samr_reach + std::ldexp(kExchangedKernelReach3, -std::max(0, level))));
+  return static_cast<int>(std::floor(samr_reach + std::ldexp(kKernelReach3, -std::max(0, level)))) + 1;
 }
 
 partition::PartitionOptions ghost_aware(partition::PartitionOptions options, int dimension, const GhostRule& rule) {

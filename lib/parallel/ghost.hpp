@@ -68,19 +68,21 @@ inline constexpr int kSecondPassWindow3 = faceswap::kCompetitorCells3 + radapt::
 static_assert(kSwapWindow3 == 1 && kRadaptWindow3 == 4 && kFirstPassWindow3 == 3 && kSecondPassWindow3 == 2);
 
 // The same with the decisions near faces exchanged (GhostRule::exchange, README.md, "Decisions
-// exchanged near faces"): after r-adaptivity each partition takes the final position, mask
-// and state of every node outside its closed box from a partition whose closed box holds
-// it, which decided it from its own data. The positions a decision in the box reads beyond
-// it are then exchanged ones; what the partition must decide itself are the nodes of its
-// closed box (0 cells out instead of kCompetitorCells3), and the forest must be right where
-// r-adaptivity builds their options (radapt::kReachCells3) and where face swapping's
-// competitors lie (faceswap::kCompetitorCells3).
-inline constexpr int kExchangedRadaptWindow3 = radapt::kReachCells3 - 1;
-inline constexpr int kExchangedFirstPassWindow3 = radapt::kFirstPassCells3 - 1;
+// exchanged near faces"). Between the guard's passes each partition takes the first-pass
+// refusals of the nodes its second pass reads outside its closed box, and after r-adaptivity
+// the final position, mask, state and finest level around of every node outside it, from
+// the partition whose closed box holds the node (which decided it on its own data). What a
+// partition decides itself are then the nodes of its closed box: the second pass on the
+// leaves around them (kSecondPassCells3 − 1 = 0), the first pass there too (its refusals of
+// the other nodes come from their owners), and options for those leaves' vertices, read from
+// the leaves around them (one cell further: 1). The forest must be right where those leaves
+// and face swapping's competitors lie: 2 cells.
 inline constexpr int kExchangedSecondPassWindow3 = radapt::kSecondPassCells3 - 1;
-inline constexpr double kExchangedKernelReach3 = std::max(radapt::kReachCells3, faceswap::kCompetitorCells3);
-static_assert(kExchangedRadaptWindow3 == 2 && kExchangedFirstPassWindow3 == 1 && kExchangedSecondPassWindow3 == 0 &&
-              kExchangedKernelReach3 == 3);
+inline constexpr int kExchangedFirstPassWindow3 = kExchangedSecondPassWindow3;
+inline constexpr int kExchangedRadaptWindow3 = radapt::kSecondPassCells3;
+inline constexpr double kExchangedKernelReach3 = std::max(kExchangedRadaptWindow3 + 1, faceswap::kCompetitorCells3);
+static_assert(kExchangedRadaptWindow3 == 1 && kExchangedFirstPassWindow3 == 0 && kExchangedSecondPassWindow3 == 0 &&
+              kExchangedKernelReach3 == 2);
 
 // Coarse cubes of ghost a 3D box needs when the coarsest effective level among the
 // inclusions near it is `level` and the lattice's finest is `max_level`: the least whole
@@ -88,7 +90,10 @@ static_assert(kExchangedRadaptWindow3 == 2 && kExchangedFirstPassWindow3 == 1 &&
 // the first layer's far face may hold midpoints the partition lacks), the kernel's reach
 // counted in cells of its level (level 2: 1 + 1.25 → 3): 7 at level 0, 4 at level 1, 3 at
 // level 2, 2 from level 3 on; 6 when nothing refines (Lmax 0). With the decisions near faces
-// exchanged (kExchangedKernelReach3): 5, 3, 2, 2; 4 when nothing refines.
+// exchanged, the least whole number not below samr::reach_coarse_cells3(max_level) +
+// kExchangedKernelReach3 / 2^level (not below: what the partition reads on the first layer's
+// far face, the nodes' decisions and the finest level around them, comes from their owners):
+// 3 at level 0, 2 from level 1 on; 2 when nothing refines.
 int ghost_margin3(int level, int max_level = 64, bool exchanged = false);
 
 struct GhostRule {

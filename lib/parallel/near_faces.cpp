@@ -28,57 +28,50 @@ struct ClosedBox {
   }
 };
 
-struct Decision {  // what the owner sends for one node
-  Vec3 position;
-  PhaseMask mask;
-  radapt::NodeState state;
-};
-
-}  // namespace
-
-std::int64_t exchange_near_faces(const Comm& comm, const grid::Lattice<3>& lattice,
-                                 const std::vector<grid::CellRange<3>>& boxes, std::span<SnappedPartition> mine) {
+// One round of questions and answers. `nodes_of(i)`: partition i's node table; `wanted(i, n)`:
+// whether its node n (outside its closed box) is asked for; `answer(j, m)`: what partition j
+// (the owner) says of its node m; `take(i, n, answer)`: partition i takes it. Returns the
+// nodes taken.
+template <class Answer, class NodesOf, class Wanted, class AnswerOf, class Take>
+std::int64_t ask_owners(const Comm& comm, const grid::Lattice<3>& lattice, const std::vector<grid::CellRange<3>>& boxes,
+                        std::span<SnappedPartition> mine, NodesOf&& nodes_of, Wanted&& wanted, AnswerOf&& answer_of,
+                        Take&& take) {
   const int ranks = comm.size();
   const int partitions = static_cast<int>(boxes.size());
   std::vector<ClosedBox> closed;
   closed.reserve(boxes.size());
   for (const auto& b : boxes) closed.emplace_back(lattice, b);
 
-  // Requests, per owner's rank: (owner partition, key); what each asked for: (partition of
-  // this rank by position in `mine`, node id), in the same order.
+  // Questions, per owner's rank: (owner partition, key); what each asked for: (position in
+  // `mine`, node id), in the same order.
   std::vector<Packer> ask(static_cast<std::size_t>(ranks));
   std::vector<std::vector<std::array<std::int32_t, 2>>> asked(static_cast<std::size_t>(ranks));
   std::vector<int> neighbours;
   for (std::size_t i = 0; i < mine.size(); ++i) {
     if (!mine[i].asks) continue;
-    const radapt::Nodes3& nodes = mine[i].snapped->nodes;
+    const radapt::Nodes3& nodes = nodes_of(i);
     const ClosedBox& own = closed[static_cast<std::size_t>(mine[i].id)];
     // The partitions whose closed box meets this one's forest, ascending ids.
-    const ClosedBox forest(lattice, mine[i].snapped->grid.forest.range());
+    const ClosedBox forest(lattice, mine[i].snapped->grid->forest.range());
     neighbours.clear();
     for (int q = 0; q < partitions; ++q)
       if (q != mine[i].id && closed[static_cast<std::size_t>(q)].meets(forest)) neighbours.push_back(q);
     for (std::size_t n = 0; n < nodes.key.size(); ++n) {
       const grid::LatticePoint3 p = grid::key3_point(nodes.key[n]);
-      if (own.holds(p)) continue;
-      int owner = -1;
-      for (int q : neighbours)
-        if (closed[static_cast<std::size_t>(q)].holds(p)) {
-          owner = q;
-          break;
-        }
-      CISAMR_CHECK(owner >= 0, "exchange_near_faces: a node in no partition's box");
-      const auto r = static_cast<std::size_t>(rank_of_partition(owner, partitions, ranks));
-      ask[r].put<std::int32_t>(owner);
+      if (own.holds(p) || !wanted(i, static_cast<std::int32_t>(n))) continue;
+      const auto owner = std::find_if(neighbours.begin(), neighbours.end(),
+                                      [&](int q) { return closed[static_cast<std::size_t>(q)].holds(p); });
+      CISAMR_CHECK(owner != neighbours.end(), "exchange near faces: a node in no partition's box");
+      const auto r = static_cast<std::size_t>(rank_of_partition(*owner, partitions, ranks));
+      ask[r].put<std::int32_t>(*owner);
       ask[r].put<grid::LatticeKey3>(nodes.key[n]);
       asked[r].push_back({static_cast<std::int32_t>(i), static_cast<std::int32_t>(n)});
     }
   }
-  std::vector<Bytes> requests(static_cast<std::size_t>(ranks));
-  for (int r = 0; r < ranks; ++r) requests[static_cast<std::size_t>(r)] = ask[static_cast<std::size_t>(r)].take();
-  const std::vector<Bytes> received = comm.alltoallv(requests);
+  std::vector<Bytes> questions(static_cast<std::size_t>(ranks));
+  for (int r = 0; r < ranks; ++r) questions[static_cast<std::size_t>(r)] = ask[static_cast<std::size_t>(r)].take();
+  const std::vector<Bytes> received = comm.alltoallv(questions);
 
-  // Answers, in the order asked; no node is written before every answer is read.
   const int first = mine.empty() ? 0 : mine.front().id;
   std::vector<Bytes> answers(static_cast<std::size_t>(ranks));
   for (int r = 0; r < ranks; ++r) {
@@ -87,13 +80,11 @@ std::int64_t exchange_near_faces(const Comm& comm, const grid::Lattice<3>& latti
     while (!u.done()) {
       const auto owner = u.get<std::int32_t>();
       const auto key = u.get<grid::LatticeKey3>();
-      const auto at = static_cast<std::size_t>(owner - first);
-      CISAMR_CHECK(at < mine.size() && mine[at].id == owner, "exchange_near_faces: a request for another rank's partition");
-      const radapt::Nodes3& nodes = mine[at].snapped->nodes;
-      const std::int32_t n = nodes.id(key);
-      CISAMR_CHECK(n >= 0, "exchange_near_faces: the owner lacks a node of its closed box");
-      const auto k = static_cast<std::size_t>(n);
-      answer.put(Decision{nodes.position[k], nodes.mask[k], nodes.state[k]});
+      const auto j = static_cast<std::size_t>(owner - first);
+      CISAMR_CHECK(j < mine.size() && mine[j].id == owner, "exchange near faces: a question for another rank's partition");
+      const std::int32_t m = nodes_of(j).id(key);
+      CISAMR_CHECK(m >= 0, "exchange near faces: the owner lacks a node of its closed box");
+      answer.put(answer_of(j, m));
     }
     answers[static_cast<std::size_t>(r)] = answer.take();
   }
@@ -103,15 +94,73 @@ std::int64_t exchange_near_faces(const Comm& comm, const grid::Lattice<3>& latti
   for (int r = 0; r < ranks; ++r) {
     Unpacker u(replies[static_cast<std::size_t>(r)]);
     for (const auto& [i, n] : asked[static_cast<std::size_t>(r)]) {
-      const auto d = u.get<Decision>();
-      radapt::Nodes3& nodes = mine[static_cast<std::size_t>(i)].snapped->nodes;
-      const auto k = static_cast<std::size_t>(n);
-      nodes.position[k] = d.position, nodes.mask[k] = d.mask, nodes.state[k] = d.state;
+      take(static_cast<std::size_t>(i), n, u.get<Answer>());
       ++taken;
     }
-    CISAMR_CHECK(u.done(), "exchange_near_faces: more answers than questions");
+    CISAMR_CHECK(u.done(), "exchange near faces: more answers than questions");
   }
   return taken;
+}
+
+struct Refusals {  // a node's first-pass refusals, bit j for its j-th option
+  std::uint32_t bits;
+  std::int32_t options;
+};
+
+struct Decision {
+  Vec3 position;
+  PhaseMask mask;
+  radapt::NodeState state;
+  std::uint8_t finest_level;
+};
+
+}  // namespace
+
+std::int64_t exchange_first_pass_refusals(const Comm& comm, const grid::Lattice<3>& lattice,
+                                          const std::vector<grid::CellRange<3>>& boxes, std::span<SnappedPartition> mine) {
+  // Per partition, the nodes the second pass's leaves hold.
+  std::vector<std::vector<std::uint8_t>> read(mine.size());
+  for (std::size_t i = 0; i < mine.size(); ++i) {
+    if (!mine[i].asks) continue;
+    const grid::TetForest& forest = mine[i].snapped->grid->forest;
+    const radapt::Nodes3& nodes = mine[i].snapped->snapping->nodes();
+    const grid::LeafWindow window =
+        grid::LeafWindow::around(lattice, boxes[static_cast<std::size_t>(mine[i].id)], mine[i].second_pass_reach);
+    read[i].assign(nodes.key.size(), 0);
+    for (std::int32_t t = 0; t < static_cast<std::int32_t>(forest.size()); ++t)
+      if (forest.is_leaf(t) && nodes.registered(t) && window.holds(forest, t))
+        for (const std::int32_t n : nodes.tet_nodes[static_cast<std::size_t>(t)]) read[i][static_cast<std::size_t>(n)] = 1;
+  }
+  const auto snapping = [&](std::size_t i) -> radapt::Snapping3& { return *mine[i].snapped->snapping; };
+  return ask_owners<Refusals>(
+      comm, lattice, boxes, mine, [&](std::size_t i) -> const radapt::Nodes3& { return snapping(i).nodes(); },
+      [&](std::size_t i, std::int32_t n) { return read[i][static_cast<std::size_t>(n)] != 0; },
+      [&](std::size_t j, std::int32_t m) {
+        return Refusals{snapping(j).first_pass_refusals(m), snapping(j).option_count(m)};
+      },
+      [&](std::size_t i, std::int32_t n, const Refusals& r) {
+        // The owner built the node's options from the same leaves (all within the forest
+        // both hold right).
+        CISAMR_CHECK(r.options == snapping(i).option_count(n), "exchange near faces: a node's options differ from its owner's");
+        snapping(i).set_first_pass_refusals(n, r.bits);
+      });
+}
+
+std::int64_t exchange_decisions(const Comm& comm, const grid::Lattice<3>& lattice,
+                                const std::vector<grid::CellRange<3>>& boxes, std::span<SnappedPartition> mine) {
+  const auto nodes = [&](std::size_t i) -> radapt::Nodes3& { return mine[i].snapped->nodes; };
+  return ask_owners<Decision>(
+      comm, lattice, boxes, mine, nodes, [](std::size_t, std::int32_t) { return true; },
+      [&](std::size_t j, std::int32_t m) {
+        const auto k = static_cast<std::size_t>(m);
+        const radapt::Nodes3& owner = nodes(j);
+        return Decision{owner.position[k], owner.mask[k], owner.state[k], owner.finest_level[k]};
+      },
+      [&](std::size_t i, std::int32_t n, const Decision& d) {
+        radapt::Nodes3& own = nodes(i);
+        const auto k = static_cast<std::size_t>(n);
+        own.position[k] = d.position, own.mask[k] = d.mask, own.state[k] = d.state, own.finest_level[k] = d.finest_level;
+      });
 }
 
 }  // namespace cisamr::parallel

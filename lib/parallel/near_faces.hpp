@@ -1,6 +1,8 @@
 #pragma once
-// The 3D decisions near faces, exchanged between partitions after r-adaptivity (README.md,
-// "Decisions exchanged near faces").
+// The 3D decisions near faces, exchanged between partitions during the kernel (README.md,
+// "Decisions exchanged near faces"). Each partition takes, for its nodes outside its closed
+// box, what the partition of the lowest id whose closed box holds the node decided there on
+// its own data. Answers are read before any node is overwritten.
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -11,20 +13,25 @@
 
 namespace cisamr::parallel {
 
-// This rank's partitions between pipeline::snap3 and pipeline::finish3.
+// This rank's partitions in the kernel (every one of them, ascending ids).
 struct SnappedPartition {
-  int id = 0;                   // partition id
-  bool asks = false;            // GhostRegion::exchange: its windows count on the exchange
-  pipeline::Snapped3* snapped;  // its forest and nodes
+  int id = 0;                           // partition id
+  bool asks = false;                    // GhostRegion::exchange: its windows count on the exchange
+  std::int64_t second_pass_reach = -1;  // GhostRegion::second_pass_reach (fine lattice units)
+  pipeline::Snapped3* snapped = nullptr;
 };
 
-// Collective. Every asking partition takes the decision (final position, mask, state) of
-// each of its nodes outside its closed box from the partition of the lowest id whose closed
-// box holds the node, which decided it on its own data (its windows cover its closed box's
-// nodes). Answers are read before any node is overwritten. `boxes`: every partition's box,
-// by id; partitions are spread over the ranks as partitions_of_rank says. Returns the nodes
-// this rank's partitions took.
-std::int64_t exchange_near_faces(const Comm& comm, const grid::Lattice<3>& lattice,
-                                 const std::vector<grid::CellRange<3>>& boxes, std::span<SnappedPartition> mine);
+// Collective, between pipeline::snap3_first and snap3_second: the guard's first-pass
+// refusals of the options of every node outside the closed box that a leaf of the second
+// pass's window holds (the owner ran the first pass on every leaf around it). Returns the
+// nodes this rank's partitions took.
+std::int64_t exchange_first_pass_refusals(const Comm& comm, const grid::Lattice<3>& lattice,
+                                          const std::vector<grid::CellRange<3>>& boxes, std::span<SnappedPartition> mine);
+
+// Collective, between pipeline::snap3_second and finish3: every node outside the closed box
+// takes its owner's final position, mask and state, and the finest level of the leaves
+// around it (the owner holds all of them). Returns the nodes this rank's partitions took.
+std::int64_t exchange_decisions(const Comm& comm, const grid::Lattice<3>& lattice,
+                                const std::vector<grid::CellRange<3>>& boxes, std::span<SnappedPartition> mine);
 
 }  // namespace cisamr::parallel

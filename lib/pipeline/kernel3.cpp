@@ -1,5 +1,7 @@
 // The 3D kernel: SAMR → r-adaptivity with the quality guard → face swapping →
 // subdivision, then the shared assembly.
+#include <chrono>
+
 #include "core/memory.hpp"
 #include "faceswap/faceswap3.hpp"
 #include "pipeline/assembly.hpp"
@@ -13,39 +15,56 @@ grid::LeafWindow window_of(const grid::Lattice3& lattice, const grid::CellRange<
   return grid::LeafWindow::around(lattice, box, reach);
 }
 
-// SAMR and r-adaptivity, their times and counters added to `result`.
-Snapped3 snap_stages(const geometry::Oracle3& oracle, const grid::Lattice3& lattice, const grid::CellRange<3>& box,
-                     const Ghost& ghost, const Options& options, std::span<const int> levels, Result<3> result) {
+// SAMR, then r-adaptivity up to its guard's first pass; their times and counters added to
+// `result`.
+Snapped3 snap_first_half(const geometry::Oracle3& oracle, const grid::Lattice3& lattice, const grid::CellRange<3>& box,
+                         const Ghost& ghost, const Options& options, std::span<const int> levels, Result<3> result) {
   Counters<3>& counters = result.counters;
   const grid::CellRange<3> range = ghosted_range(lattice, box, ghost.sides);
   const auto window = [&](std::int64_t reach) { return window_of(lattice, box, reach); };
-  samr::RefinedGrid3 grid = [&] {
+  // On the heap: r-adaptivity's state refers to it while a Snapped3 moves.
+  auto grid = [&] {
     ScopedPhase timer(&result.times, "samr");
-    return samr::refine3(oracle, lattice, range, levels, options.progress);
+    return std::make_unique<samr::RefinedGrid3>(samr::refine3(oracle, lattice, range, levels, options.progress));
   }();
   // After each stage: what it freed goes back to the system (hash-map nodes would stay
   // resident in the heap, under the next stage's arrays), and the forest keeps only what
   // the later stages read (validation/bench/MEMORY.md).
-  grid.release_lists();
+  grid->release_lists();
   release_free_memory();
   counters.coarse_cells = range.count(0) * range.count(1) * range.count(2);
-  counters.refinements = grid.refinements;
-  counters.samr_sweeps = grid.sweeps;
-  for (std::int32_t t = 0; t < static_cast<std::int32_t>(grid.forest.size()); ++t)
-    counters.leaves += grid.forest.is_leaf(t) ? 1 : 0;
+  counters.refinements = grid->refinements;
+  counters.samr_sweeps = grid->sweeps;
+  for (std::int32_t t = 0; t < static_cast<std::int32_t>(grid->forest.size()); ++t)
+    counters.leaves += grid->forest.is_leaf(t) ? 1 : 0;
 
-  radapt::Nodes3 nodes = [&] {
-    ScopedPhase timer(&result.times, "radapt");
-    return radapt::snap3(oracle, grid,
-                         radapt::Options3{.alpha = options.alpha, .alpha_diagonal = options.alpha_diagonal3,
-                                          .max_candidates = options.max_candidates3,
-                                          .bound = options.bound3,
-                                          .window = window(ghost.radapt_reach),
-                                          .first_pass_window = window(ghost.first_pass_reach),
-                                          .second_pass_window = window(ghost.second_pass_reach),
-                                          .progress = options.progress});
-  }();
+  Snapped3 snapped{std::move(grid), std::nullopt, {}, std::move(result)};
+  {
+    ScopedPhase timer(&snapped.result.times, "radapt");
+    snapped.snapping.emplace(oracle, *snapped.grid,
+                             radapt::Options3{.alpha = options.alpha, .alpha_diagonal = options.alpha_diagonal3,
+                                              .max_candidates = options.max_candidates3,
+                                              .bound = options.bound3,
+                                              .window = window(ghost.radapt_reach),
+                                              .first_pass_window = window(ghost.first_pass_reach),
+                                              .second_pass_window = window(ghost.second_pass_reach),
+                                              .progress = options.progress});
+  }
+  return snapped;
+}
+
+// The guard's second pass and every node's decision.
+void snap_second_half(Snapped3& snapped) {
+  {
+    // The radapt phase goes on (its progress was told when it began in the first half).
+    const auto start = std::chrono::steady_clock::now();
+    snapped.nodes = snapped.snapping->finish();
+    snapped.result.times.add("radapt", std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  }
+  snapped.snapping.reset();
   release_free_memory();
+  const radapt::Nodes3& nodes = snapped.nodes;
+  Counters<3>& counters = snapped.result.counters;
   counters.lattice_nodes = static_cast<std::int64_t>(nodes.key.size());
   counters.snapped_nodes = nodes.snapped_count;
   counters.refused_nodes = nodes.refused_count;
@@ -56,16 +75,16 @@ Snapped3 snap_stages(const geometry::Oracle3& oracle, const grid::Lattice3& latt
   counters.guarded_leaves = nodes.guarded_leaves;
   counters.guard_combinations = nodes.combinations;
   counters.missing_crossings = nodes.missing_crossings;
-  return Snapped3{std::move(grid), std::move(nodes), std::move(result)};
 }
 
 // Face swapping and subdivision; returns what the mesh is made of. The working state (the
 // forest, the snapping state, the swaps) is released on return, before the mesh is built,
 // so that it does not add to the peak (validation/paper3/README.md, memory).
 MeshParts<3> finish_stages(const geometry::Oracle3& oracle, const grid::Lattice3& lattice, const grid::CellRange<3>& box,
-                           const Ghost& ghost, const Options& options, samr::RefinedGrid3 grid, radapt::Nodes3 nodes,
-                           Result<3>& result) {
+                           const Ghost& ghost, const Options& options, std::unique_ptr<samr::RefinedGrid3> owned_grid,
+                           radapt::Nodes3 nodes, Result<3>& result) {
   Counters<3>& counters = result.counters;
+  const samr::RefinedGrid3& grid = *owned_grid;
   const faceswap::Swaps3 swaps = [&] {
     ScopedPhase timer(&result.times, "faceswap");
     return faceswap::swap3(oracle, grid, nodes, faceswap::Options3{.trigger = options.swap_trigger3,
@@ -100,16 +119,29 @@ MeshParts<3> finish_stages(const geometry::Oracle3& oracle, const grid::Lattice3
 
 MeshParts<3> run_stages(const geometry::Oracle3& oracle, const grid::Lattice3& lattice, const grid::CellRange<3>& box,
                         const Ghost& ghost, const Options& options, std::span<const int> levels, Result<3>& result) {
-  Snapped3 snapped = snap_stages(oracle, lattice, box, ghost, options, levels, std::move(result));
+  Snapped3 snapped = snap_first_half(oracle, lattice, box, ghost, options, levels, std::move(result));
+  snap_second_half(snapped);
   result = std::move(snapped.result);
   return finish_stages(oracle, lattice, box, ghost, options, std::move(snapped.grid), std::move(snapped.nodes), result);
 }
 
-Snapped3 snap3(const geometry::Oracle3& oracle, const grid::Lattice<3>& lattice, const grid::CellRange<3>& box,
-               const Ghost& ghost, const Options& options, std::span<const int> levels) {
+Snapped3 snap3_first(const geometry::Oracle3& oracle, const grid::Lattice<3>& lattice, const grid::CellRange<3>& box,
+                     const Ghost& ghost, const Options& options, std::span<const int> levels) {
   Result<3> result;
   result.times.progress = options.progress;
-  return snap_stages(oracle, lattice, box, ghost, options, levels, std::move(result));
+  return snap_first_half(oracle, lattice, box, ghost, options, levels, std::move(result));
+}
+
+void snap3_second(Snapped3& snapped, const Options& options) {
+  snapped.result.times.progress = options.progress;
+  snap_second_half(snapped);
+}
+
+Snapped3 snap3(const geometry::Oracle3& oracle, const grid::Lattice<3>& lattice, const grid::CellRange<3>& box,
+               const Ghost& ghost, const Options& options, std::span<const int> levels) {
+  Snapped3 snapped = snap3_first(oracle, lattice, box, ghost, options, levels);
+  snap3_second(snapped, options);
+  return snapped;
 }
 
 Result<3> finish3(const geometry::Oracle3& oracle, const grid::Lattice<3>& lattice, const grid::CellRange<3>& box,

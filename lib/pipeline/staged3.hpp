@@ -1,8 +1,11 @@
 #pragma once
-// The 3D kernel in two halves, for a parallel mesher that exchanges the decisions near its
-// boxes' faces between them (lib/parallel/README.md, "Ghost region (3D)", exchange):
-// snap3 runs SAMR and r-adaptivity, finish3 face swapping, subdivision and assembly. run<3>
-// is finish3(snap3(...)): the same code, the same mesh.
+// The 3D kernel in parts, for a parallel mesher that exchanges the decisions near its boxes'
+// faces between them (lib/parallel/README.md, "Decisions exchanged near faces"):
+// snap3_first runs SAMR and r-adaptivity up to its guard's first pass, snap3_second the
+// second pass and every node's decision, finish3 face swapping, subdivision and assembly.
+// run<3> is the three in a row: the same code, the same mesh.
+#include <memory>
+#include <optional>
 #include <span>
 
 #include "pipeline/pipeline.hpp"
@@ -11,14 +14,20 @@
 
 namespace cisamr::pipeline {
 
-// What the kernel holds between r-adaptivity and face swapping: the forest, every node's
-// decision (final position, mask, state) and the result so far (counters, stage times).
+// What the kernel holds between its parts: the forest, r-adaptivity between the guard's
+// passes (after snap3_first) or every node's decision (after snap3_second), and the result
+// so far (counters, stage times).
 struct Snapped3 {
-  samr::RefinedGrid3 grid;
+  std::unique_ptr<samr::RefinedGrid3> grid;  // on the heap: `snapping` refers to it
+  std::optional<radapt::Snapping3> snapping;
   radapt::Nodes3 nodes;
   Result<3> result;
 };
 
+Snapped3 snap3_first(const geometry::Oracle3& oracle, const grid::Lattice<3>& lattice, const grid::CellRange<3>& box,
+                     const Ghost& ghost, const Options& options, std::span<const int> levels);
+void snap3_second(Snapped3& snapped, const Options& options);
+// Both.
 Snapped3 snap3(const geometry::Oracle3& oracle, const grid::Lattice<3>& lattice, const grid::CellRange<3>& box,
                const Ghost& ghost, const Options& options, std::span<const int> levels);
 

@@ -78,23 +78,49 @@ struct EdgeGeometry {
   double length = 0;
 };
 
+}  // namespace
+
+// (Outside the anonymous namespace: Snapping3 holds one.)
 class Snapper {
  public:
   Snapper(const geometry::Oracle3& oracle, const samr::RefinedGrid3& g, const Options3& options)
       : oracle_(oracle), g_(g), forest_(g.forest), lattice_(g.forest.lattice()), options_(options) {}
 
-  Nodes3 run() {
+  // Nodes, edges, options and the guard's first pass (Snapping3's constructor).
+  void first_half() {
     register_nodes();
     find_edges();
     release_free_memory();  // the edge search's hash map
     build_options();
     if (options_.bound > 0) {
       summarise_menus();
-      guard();
+      guard_first_pass();
     }
+  }
+  // The guard's second pass and every node's decision (Snapping3::finish).
+  Nodes3 second_half() {
+    if (options_.bound > 0) guard_second_pass();
     apply();
     advance(options_.progress, passes() * tets(), passes() * tets());
     return std::move(nodes_);
+  }
+
+  const Nodes3& nodes() const { return nodes_; }
+  int option_count(std::int32_t node) const {
+    return option_begin_[static_cast<std::size_t>(node) + 1] - option_begin_[static_cast<std::size_t>(node)];
+  }
+  // Bit j: the first pass refused the node's j-th option.
+  std::uint32_t first_pass_refusals(std::int32_t node) const {
+    std::uint32_t bits = 0;
+    if (likely_.empty()) return bits;
+    const std::int32_t begin = option_begin_[static_cast<std::size_t>(node)];
+    for (int j = 0; j < option_count(node); ++j) bits |= likely_[static_cast<std::size_t>(begin + j)] ? 1u << j : 0u;
+    return bits;
+  }
+  void set_first_pass_refusals(std::int32_t node, std::uint32_t bits) {
+    if (likely_.empty()) return;
+    const std::int32_t begin = option_begin_[static_cast<std::size_t>(node)];
+    for (int j = 0; j < option_count(node); ++j) likely_[static_cast<std::size_t>(begin + j)] = (bits >> j) & 1;
   }
 
  private:
@@ -537,18 +563,24 @@ class Snapper {
   //  2. every leaf checks every combination of the options not refused in pass 1, refusing
   //     (see pick_refusal) until none of them is bad.
   // A node ends at its first option not refused; the combination that happens in a leaf
-  // avoids every refused option, so the leaf checked it in pass 2.
-  void guard() {
+  // avoids every refused option, so the leaf checked it in pass 2. Between the passes a
+  // caller may replace some nodes' pass-1 refusals (Snapping3): the parallel mesher takes
+  // those of nodes outside a box from the partition that owns them.
+  std::vector<std::uint8_t> likely_;       // pass 1's refusals, per option
+  std::vector<std::int32_t> with_menu_;    // the leaves of either pass's window with a menu, ascending
+  void guard_first_pass() {
     Menu menu{};
     std::array<int, 4> count{};
     std::array<std::int32_t, 4> chosen{};
     const std::array<int, 4> first{0, 0, 0, 0};
-    std::vector<std::uint8_t> likely(option_.size(), 0);  // pass 1's refusals
+    likely_.assign(option_.size(), 0);
+    std::vector<std::uint8_t>& likely = likely_;
     // Pass 1's scan also lists the leaves of pass 2's window that have a menu, in ascending
     // order, so that pass 2 visits only those (in the kernel its window lies within pass 1's).
     const auto& first_window = options_.first_pass_window;
     const auto& second_window = options_.second_pass_window;
-    std::vector<std::int32_t> with_menu;
+    std::vector<std::int32_t>& with_menu = with_menu_;
+    with_menu.clear();
     for (std::int32_t t = 0; t < static_cast<std::int32_t>(forest_.size()); ++t) {
       tet_done(2, t);
       if (!forest_.is_leaf(t) || !nodes_.registered(t)) continue;
@@ -564,9 +596,17 @@ class Snapper {
       const std::int32_t pick = pick_refusal(menu, count, first, chosen, [](int, int) { return false; });
       if (pick >= 0) likely[static_cast<std::size_t>(pick)] = 1;
     }
+  }
+
+  void guard_second_pass() {
+    Menu menu{};
+    std::array<int, 4> count{};
+    const std::vector<std::uint8_t>& likely = likely_;
+    const auto& first_window = options_.first_pass_window;
+    const auto& second_window = options_.second_pass_window;
     for (std::size_t o = 0; o < likely.size(); ++o) refused_[o] = likely[o];
 
-    for (const std::int32_t t : with_menu) {
+    for (const std::int32_t t : with_menu_) {
       tet_done(3, t);
       if (!second_window.holds(forest_, t)) continue;
       build_menu(t, menu, count);  // pass 1 found one
@@ -591,6 +631,8 @@ class Snapper {
       take_menu(t, menu, count);
       nodes_.combinations += guard_leaf(menu, count, firsts_good);
     }
+    std::vector<std::int32_t>().swap(with_menu_);
+    std::vector<std::uint8_t>().swap(likely_);
   }
 
   // Pass 2 in one leaf whose menus take_menu has read: every combination (but the first when
@@ -883,12 +925,29 @@ class Snapper {
   }
 };
 
-}  // namespace
-
-Nodes3 snap3(const geometry::Oracle3& oracle, const samr::RefinedGrid3& g, const Options3& options) {
+Snapping3::Snapping3(const geometry::Oracle3& oracle, const samr::RefinedGrid3& g, const Options3& options) {
   if (options.max_candidates < 0 || options.max_candidates + 2 > kMaxMenu)
     throw std::invalid_argument("snap3: max_candidates must lie in [0, " + std::to_string(kMaxMenu - 2) + "]");
-  return Snapper(oracle, g, options).run();
+  snapper_ = std::make_unique<Snapper>(oracle, g, options);
+  snapper_->first_half();
+}
+Snapping3::~Snapping3() = default;
+Snapping3::Snapping3(Snapping3&&) noexcept = default;
+Snapping3& Snapping3::operator=(Snapping3&&) noexcept = default;
+const Nodes3& Snapping3::nodes() const { return snapper_->nodes(); }
+int Snapping3::option_count(std::int32_t node) const { return snapper_->option_count(node); }
+std::uint32_t Snapping3::first_pass_refusals(std::int32_t node) const { return snapper_->first_pass_refusals(node); }
+void Snapping3::set_first_pass_refusals(std::int32_t node, std::uint32_t bits) {
+  snapper_->set_first_pass_refusals(node, bits);
+}
+Nodes3 Snapping3::finish() {
+  Nodes3 nodes = snapper_->second_half();
+  snapper_.reset();
+  return nodes;
+}
+
+Nodes3 snap3(const geometry::Oracle3& oracle, const samr::RefinedGrid3& g, const Options3& options) {
+  return Snapping3(oracle, g, options).finish();
 }
 
 }  // namespace cisamr::radapt

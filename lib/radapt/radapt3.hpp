@@ -19,6 +19,7 @@
 #include <algorithm>
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <unordered_map>
 #include <utility>
 #include <vector>
@@ -194,5 +195,27 @@ struct Nodes3 {
 // Registers the vertices of every leaf in the window (every leaf by default), classifies them
 // and decides every node's fate.
 Nodes3 snap3(const geometry::Oracle3& oracle, const samr::RefinedGrid3& grid, const Options3& options);
+
+// snap3 in two halves, for a parallel mesher that exchanges the guard's first-pass refusals
+// between them (lib/parallel/README.md, "Decisions exchanged near faces"): the constructor
+// registers the nodes, builds their options and runs the guard's first pass; finish() runs
+// the second pass and decides every node. snap3 is the two in a row.
+class Snapper;
+class Snapping3 {
+ public:
+  Snapping3(const geometry::Oracle3& oracle, const samr::RefinedGrid3& grid, const Options3& options);
+  ~Snapping3();
+  Snapping3(Snapping3&&) noexcept;
+  Snapping3& operator=(Snapping3&&) noexcept;
+  const Nodes3& nodes() const;  // keys, original positions and masks (decisions not yet made)
+  int option_count(std::int32_t node) const;
+  // Bit j: the first pass refused the node's j-th option (every bit 0 without the guard).
+  std::uint32_t first_pass_refusals(std::int32_t node) const;
+  void set_first_pass_refusals(std::int32_t node, std::uint32_t bits);
+  Nodes3 finish();  // once
+
+ private:
+  std::unique_ptr<Snapper> snapper_;
+};
 
 }  // namespace cisamr::radapt

@@ -140,6 +140,12 @@ TEST(GhostMargin3, FollowsTheCoarsestLevelNearTheBox) {
   EXPECT_EQ(ghost_margin3(1, 3), 4);
   EXPECT_EQ(ghost_margin3(2, 2), 3);
   EXPECT_EQ(ghost_margin3(3, 3), 2);
+  // With the decisions near faces exchanged: SAMR's reach + 2/2^l rounded up.
+  EXPECT_EQ(ghost_margin3(0, 4, true), 3);
+  EXPECT_EQ(ghost_margin3(1, 4, true), 2);
+  EXPECT_EQ(ghost_margin3(2, 4, true), 2);
+  EXPECT_EQ(ghost_margin3(6, 6, true), 2);
+  EXPECT_EQ(ghost_margin3(0, 0, true), 2);
   geometry::SceneDesc s;
   s.dimension = 3;
   s.domain_max = {8, 4, 4};
@@ -303,8 +309,8 @@ TEST(Invariance3, SixtyFourPartitions) {
 // SAMR's reach is the region's first cube whatever Lmax, and the kernel's 5 cells of the
 // level are counted as such (no safety cube since KernelReach3 tests that reach), so
 // level-1 and level-2 scenes take 4 and 3 cubes with or without extra levels (5 and 4
-// before), and 3 and 2 with the decisions near faces exchanged (the kernel's 3 cells):
-// still the whole-domain mesh.
+// before), and 2 and 2 with the decisions near faces exchanged (the kernel's 2 cells, and no
+// cube for what lies on the first layer's far face): still the whole-domain mesh.
 TEST(Invariance3, LevelOneAndTwoTakeTheirMargins) {
   pipeline::Options no_extra;
   no_extra.extra_levels = 0;
@@ -312,7 +318,7 @@ TEST(Invariance3, LevelOneAndTwoTakeTheirMargins) {
     geometry::SceneDesc scene;
     int margin, exchanged_margin;
   };
-  const std::vector<Scene> scenes{{testing::packed_scene3(12, 1, 16, 16, 12, 80), 4, 3},
+  const std::vector<Scene> scenes{{testing::packed_scene3(12, 1, 16, 16, 12, 80), 4, 2},
                                   {testing::packed_scene3(13, 2, 10, 10, 8, 30), 3, 2}};
   for (const auto& [scene, recomputed_margin, exchanged_margin] : scenes)
     for (const pipeline::Options& options : {pipeline::Options{}, no_extra}) {
@@ -551,20 +557,25 @@ std::vector<testing::Case3> wider_sweep_cases() {
 
 // With the decisions near faces exchanged, a partition decides only the nodes of its closed
 // box (the others come from their owners): on the whole run's forest, r-adaptivity on the
-// leaves within kExchangedRadaptWindow3 = 2 cells of the box, its guard's passes on
-// kExchangedFirstPassWindow3 = 1 and kExchangedSecondPassWindow3 = 0, gives every node of the
-// closed box the whole run's final position, mask and state. With every window on the leaves
-// touching the box only, some box's nodes differ (the comparison can fail). The same scenes
-// and boxes as KernelReach3.TheBoxReadsNothingBeyondFiveCellsOfItsLevel.
+// leaves within kExchangedRadaptWindow3 = 1 cell of the box, both guard passes on the leaves
+// touching it (kExchangedFirstPassWindow3 = kExchangedSecondPassWindow3 = 0), with the
+// whole run's first-pass refusals for the nodes outside the closed box that the second pass
+// reads (what their owners send), gives every node of the closed box the whole run's final
+// position, mask, state and finest level around. With r-adaptivity on the touching leaves
+// only, some boxes' nodes differ (the comparison can fail); without the refusals taken,
+// some of the wider sweep's do (refusals near a face are rare). The same scenes and boxes as
+// KernelReach3.TheBoxReadsNothingBeyondFiveCellsOfItsLevel.
 struct ExchangedWindowCounts {
   int compared = 0;
   std::int64_t nodes_compared = 0;
-  int box_only_differs = 0;  // boxes whose nodes differ with every window on the box's touching leaves
+  int box_only_differs = 0;     // boxes whose nodes differ with r-adaptivity on the box's touching leaves only
+  int own_refusals_differ = 0;  // boxes whose nodes differ without the first-pass refusals exchanged
 };
 ExchangedWindowCounts compare_exchanged_windows(const std::vector<testing::Case3>& cases, std::span<const int> boxes) {
   ExchangedWindowCounts counts;
   int& compared = counts.compared;
   int& box_only_differs = counts.box_only_differs;
+  int& own_refusals_differ = counts.own_refusals_differ;
   std::int64_t& nodes_compared = counts.nodes_compared;
   for (const auto& c : cases) {
     const geometry::SceneDesc scene = testing::with_triangles(c.scene);
@@ -577,7 +588,15 @@ ExchangedWindowCounts compare_exchanged_windows(const std::vector<testing::Case3
       whole_domain[static_cast<std::size_t>(d)] = {static_cast<int>(lattice.coarse_cells[d]), static_cast<int>(lattice.coarse_cells[d])};
     grid::CellRange<3> domain;
     for (int d = 0; d < 3; ++d) domain.lo[d] = 0, domain.hi[d] = lattice.coarse_cells[d];
-    const pipeline::Snapped3 whole = pipeline::snap3(oracle, lattice, domain, pipeline::Ghost{whole_domain}, c.options, levels);
+    // The whole run, its first-pass refusals kept (what the owners send).
+    pipeline::Snapped3 whole = pipeline::snap3_first(oracle, lattice, domain, pipeline::Ghost{whole_domain}, c.options, levels);
+    std::vector<std::uint32_t> whole_refusals(whole.snapping->nodes().key.size());
+    std::vector<int> whole_options(whole_refusals.size());
+    for (std::size_t n = 0; n < whole_refusals.size(); ++n) {
+      whole_refusals[n] = whole.snapping->first_pass_refusals(static_cast<std::int32_t>(n));
+      whole_options[n] = whole.snapping->option_count(static_cast<std::int32_t>(n));
+    }
+    pipeline::snap3_second(whole, c.options);
     GhostRule exchanging;
     exchanging.exchange = true;
     const std::array<int, 3> split{3, 3, 2};
@@ -592,38 +611,65 @@ ExchangedWindowCounts compare_exchanged_windows(const std::vector<testing::Case3
       }
       const GhostRegion3 region = ghost_region3(index, lattice, box, exchanging, levels);
       if (!region.exchange) continue;  // no inclusion near the box: nothing snaps there
-      // The nodes of the closed box that differ from the whole run's (all must be there).
-      const auto differing = [&](pipeline::Ghost ghost) {
+      const grid::LeafWindow closed = grid::LeafWindow::around(lattice, box, 0);
+      const auto in_closed_box = [&](grid::LatticeKey3 key) {
+        const grid::LatticePoint3 p = grid::key3_point(key);
+        bool inside = true;
+        for (int d = 0; d < 3; ++d) inside = inside && p[d] >= closed.lo[d] && p[d] <= closed.hi[d];
+        return inside;
+      };
+      // The nodes of the closed box whose decision (or finest level around) differs from the
+      // whole run's (all must be there); with `take_refusals`, the first-pass refusals of the
+      // nodes outside the closed box that the second pass's leaves read are the whole run's.
+      const auto differing = [&](pipeline::Ghost ghost, bool take_refusals) {
         ghost.sides = whole_domain;
-        const pipeline::Snapped3 part = pipeline::snap3(oracle, lattice, box, ghost, c.options, levels);
-        const grid::LeafWindow closed = grid::LeafWindow::around(lattice, box, 0);
-        int differ = 0;
+        pipeline::Snapped3 part = pipeline::snap3_first(oracle, lattice, box, ghost, c.options, levels);
+        int differ = 0;  // options unlike the owner's count (the mesher refuses to take their refusals)
+        if (take_refusals) {
+          const radapt::Nodes3& nodes = part.snapping->nodes();
+          const grid::TetForest& forest = part.grid->forest;
+          const grid::LeafWindow second = grid::LeafWindow::around(lattice, box, ghost.second_pass_reach);
+          for (std::int32_t t = 0; t < static_cast<std::int32_t>(forest.size()); ++t) {
+            if (!forest.is_leaf(t) || !nodes.registered(t) || !second.holds(forest, t)) continue;
+            for (const std::int32_t m : nodes.tet_nodes[static_cast<std::size_t>(t)]) {
+              const grid::LatticeKey3 key = nodes.key[static_cast<std::size_t>(m)];
+              if (in_closed_box(key)) continue;
+              const auto w = static_cast<std::size_t>(whole.nodes.id(key));
+              if (part.snapping->option_count(m) != whole_options[w]) {
+                ++differ;
+                continue;
+              }
+              part.snapping->set_first_pass_refusals(m, whole_refusals[w]);
+            }
+          }
+        }
+        pipeline::snap3_second(part, c.options);
         for (std::size_t n = 0; n < whole.nodes.key.size(); ++n) {
-          const grid::LatticePoint3 p = grid::key3_point(whole.nodes.key[n]);
-          bool inside = true;
-          for (int d = 0; d < 3; ++d) inside = inside && p[d] >= closed.lo[d] && p[d] <= closed.hi[d];
-          if (!inside) continue;
+          if (!in_closed_box(whole.nodes.key[n])) continue;
           const std::int32_t m = part.nodes.id(whole.nodes.key[n]);
           EXPECT_GE(m, 0) << c.name << ", box " << b << ": a node of the closed box missing";
           if (m < 0) continue;
           const auto k = static_cast<std::size_t>(m);
           ++nodes_compared;
           differ += part.nodes.position[k] != whole.nodes.position[n] || part.nodes.mask[k] != whole.nodes.mask[n] ||
-                            part.nodes.state[k] != whole.nodes.state[n]
+                            part.nodes.state[k] != whole.nodes.state[n] ||
+                            part.nodes.finest_level[k] != whole.nodes.finest_level[n]
                         ? 1
                         : 0;
         }
         return differ;
       };
-      EXPECT_EQ(differing(kernel_ghost(region)), 0) << c.name << ", box " << b << ", the exchanged windows";
+      EXPECT_EQ(differing(kernel_ghost(region), true), 0) << c.name << ", box " << b << ", the exchanged windows";
       pipeline::Ghost box_only = kernel_ghost(region);
-      box_only.radapt_reach = box_only.first_pass_reach = box_only.second_pass_reach = 0;
-      box_only_differs += differing(box_only) > 0 ? 1 : 0;
+      box_only.radapt_reach = 0;
+      box_only_differs += differing(box_only, true) > 0 ? 1 : 0;
+      own_refusals_differ += differing(kernel_ghost(region), false) > 0 ? 1 : 0;
       ++compared;
     }
   }
-  std::printf("%d boxes, %lld nodes compared; with every window on the box's touching leaves %d boxes differ\n", compared,
-              static_cast<long long>(nodes_compared), box_only_differs);
+  std::printf("%d boxes, %lld nodes compared; %d boxes differ with r-adaptivity on the box's touching leaves only, %d "
+              "without the first-pass refusals exchanged\n",
+              compared, static_cast<long long>(nodes_compared), box_only_differs, own_refusals_differ);
   return counts;
 }
 
