@@ -4,6 +4,7 @@
 
 #include "core/check.hpp"
 #include "grid/tet_lattice.hpp"
+#include "parallel/collective.hpp"
 #include "parallel/distributed.hpp"
 #include "parallel/exchange.hpp"
 
@@ -47,58 +48,66 @@ std::int64_t ask_owners(const Comm& comm, const grid::Lattice<3>& lattice, const
   std::vector<Packer> ask(static_cast<std::size_t>(ranks));
   std::vector<std::vector<std::array<std::int32_t, 2>>> asked(static_cast<std::size_t>(ranks));
   std::vector<int> neighbours;
-  for (std::size_t i = 0; i < mine.size(); ++i) {
-    if (!mine[i].asks) continue;
-    const radapt::Nodes3& nodes = nodes_of(i);
-    const ClosedBox& own = closed[static_cast<std::size_t>(mine[i].id)];
-    // The partitions whose closed box meets this one's forest, ascending ids.
-    const ClosedBox forest(lattice, mine[i].snapped->grid->forest.range());
-    neighbours.clear();
-    for (int q = 0; q < partitions; ++q)
-      if (q != mine[i].id && closed[static_cast<std::size_t>(q)].meets(forest)) neighbours.push_back(q);
-    for (std::size_t n = 0; n < nodes.key.size(); ++n) {
-      const grid::LatticePoint3 p = grid::key3_point(nodes.key[n]);
-      if (own.holds(p) || !wanted(i, static_cast<std::int32_t>(n))) continue;
-      const auto owner = std::find_if(neighbours.begin(), neighbours.end(),
-                                      [&](int q) { return closed[static_cast<std::size_t>(q)].holds(p); });
-      CISAMR_CHECK(owner != neighbours.end(), "exchange near faces: a node in no partition's box");
-      const auto r = static_cast<std::size_t>(rank_of_partition(*owner, partitions, ranks));
-      ask[r].put<std::int32_t>(*owner);
-      ask[r].put<grid::LatticeKey3>(nodes.key[n]);
-      asked[r].push_back({static_cast<std::int32_t>(i), static_cast<std::int32_t>(n)});
+  // Each local step agrees on its errors (a check failing on one rank must not leave the
+  // others waiting in the next alltoallv).
+  run_collectively(comm, [&] {
+    for (std::size_t i = 0; i < mine.size(); ++i) {
+      if (!mine[i].asks) continue;
+      const radapt::Nodes3& nodes = nodes_of(i);
+      const ClosedBox& own = closed[static_cast<std::size_t>(mine[i].id)];
+      // The partitions whose closed box meets this one's forest, ascending ids.
+      const ClosedBox forest(lattice, mine[i].snapped->grid->forest.range());
+      neighbours.clear();
+      for (int q = 0; q < partitions; ++q)
+        if (q != mine[i].id && closed[static_cast<std::size_t>(q)].meets(forest)) neighbours.push_back(q);
+      for (std::size_t n = 0; n < nodes.key.size(); ++n) {
+        const grid::LatticePoint3 p = grid::key3_point(nodes.key[n]);
+        if (own.holds(p) || !wanted(i, static_cast<std::int32_t>(n))) continue;
+        const auto owner = std::find_if(neighbours.begin(), neighbours.end(),
+                                        [&](int q) { return closed[static_cast<std::size_t>(q)].holds(p); });
+        CISAMR_CHECK(owner != neighbours.end(), "exchange near faces: a node in no partition's box");
+        const auto r = static_cast<std::size_t>(rank_of_partition(*owner, partitions, ranks));
+        ask[r].put<std::int32_t>(*owner);
+        ask[r].put<grid::LatticeKey3>(nodes.key[n]);
+        asked[r].push_back({static_cast<std::int32_t>(i), static_cast<std::int32_t>(n)});
+      }
     }
-  }
+  });
   std::vector<Bytes> questions(static_cast<std::size_t>(ranks));
   for (int r = 0; r < ranks; ++r) questions[static_cast<std::size_t>(r)] = ask[static_cast<std::size_t>(r)].take();
   const std::vector<Bytes> received = comm.alltoallv(questions);
 
   const int first = mine.empty() ? 0 : mine.front().id;
   std::vector<Bytes> answers(static_cast<std::size_t>(ranks));
-  for (int r = 0; r < ranks; ++r) {
-    Unpacker u(received[static_cast<std::size_t>(r)]);
-    Packer answer;
-    while (!u.done()) {
-      const auto owner = u.get<std::int32_t>();
-      const auto key = u.get<grid::LatticeKey3>();
-      const auto j = static_cast<std::size_t>(owner - first);
-      CISAMR_CHECK(j < mine.size() && mine[j].id == owner, "exchange near faces: a question for another rank's partition");
-      const std::int32_t m = nodes_of(j).id(key);
-      CISAMR_CHECK(m >= 0, "exchange near faces: the owner lacks a node of its closed box");
-      answer.put(answer_of(j, m));
+  run_collectively(comm, [&] {
+    for (int r = 0; r < ranks; ++r) {
+      Unpacker u(received[static_cast<std::size_t>(r)]);
+      Packer answer;
+      while (!u.done()) {
+        const auto owner = u.get<std::int32_t>();
+        const auto key = u.get<grid::LatticeKey3>();
+        const auto j = static_cast<std::size_t>(owner - first);
+        CISAMR_CHECK(j < mine.size() && mine[j].id == owner, "exchange near faces: a question for another rank's partition");
+        const std::int32_t m = nodes_of(j).id(key);
+        CISAMR_CHECK(m >= 0, "exchange near faces: the owner lacks a node of its closed box");
+        answer.put(answer_of(j, m));
+      }
+      answers[static_cast<std::size_t>(r)] = answer.take();
     }
-    answers[static_cast<std::size_t>(r)] = answer.take();
-  }
+  });
   const std::vector<Bytes> replies = comm.alltoallv(answers);
 
   std::int64_t taken = 0;
-  for (int r = 0; r < ranks; ++r) {
-    Unpacker u(replies[static_cast<std::size_t>(r)]);
-    for (const auto& [i, n] : asked[static_cast<std::size_t>(r)]) {
-      take(static_cast<std::size_t>(i), n, u.get<Answer>());
-      ++taken;
+  run_collectively(comm, [&] {
+    for (int r = 0; r < ranks; ++r) {
+      Unpacker u(replies[static_cast<std::size_t>(r)]);
+      for (const auto& [i, n] : asked[static_cast<std::size_t>(r)]) {
+        take(static_cast<std::size_t>(i), n, u.get<Answer>());
+        ++taken;
+      }
+      CISAMR_CHECK(u.done(), "exchange near faces: more answers than questions");
     }
-    CISAMR_CHECK(u.done(), "exchange near faces: more answers than questions");
-  }
+  });
   return taken;
 }
 
