@@ -451,6 +451,40 @@ TEST(SamrReach3, BeyondTheFirstLayerTheForestIsTheWholeRunsForest) {
 // guard's passes on kFirstPassWindow3 and kSecondPassWindow3 (a forced window, as w, runs
 // them on all of r-adaptivity's); with both passes on the box alone it may differ. Boxes of a
 // 3×3×2 split: box 13 has six inner faces, the others meet the domain.
+// A scene of the reach comparisons below and what they compare on: its lattice, effective
+// levels, oracle and inclusion index, and ghost sides that cover the whole domain.
+struct ReachScene {
+  geometry::SceneDesc scene;
+  grid::Lattice3 lattice;
+  std::vector<int> levels;
+  geometry::Oracle3 oracle;
+  InclusionIndex3 index;
+  pipeline::GhostSides whole_domain{};
+  explicit ReachScene(const testing::Case3& c)
+      : scene(testing::with_triangles(c.scene)),
+        lattice(scene_lattice<3>(scene, c.options)),
+        levels(pipeline::effective_levels3(scene, lattice, pipeline::holding_boxes(scene))),
+        oracle(scene),
+        index(scene, lattice, GhostRule{}) {
+    for (int d = 0; d < 3; ++d)
+      whole_domain[static_cast<std::size_t>(d)] = {static_cast<int>(lattice.coarse_cells[d]), static_cast<int>(lattice.coarse_cells[d])};
+  }
+};
+
+// Box b of the 3×3×2 split of the lattice's coarse cubes (box 13 has six inner faces).
+grid::CellRange<3> split_box(const grid::Lattice3& lattice, int b) {
+  const std::array<int, 3> split{3, 3, 2};
+  grid::CellRange<3> box;
+  for (int d = 0, rest = b; d < 3; ++d) {
+    const int i = rest % split[static_cast<std::size_t>(d)];
+    rest /= split[static_cast<std::size_t>(d)];
+    const std::int64_t n = lattice.coarse_cells[d];
+    box.lo[d] = n * i / split[static_cast<std::size_t>(d)];
+    box.hi[d] = n * (i + 1) / split[static_cast<std::size_t>(d)];
+  }
+  return box;
+}
+
 struct KernelReachCounts {
   int compared = 0;
   int half_differs = 0;            // with half-cell windows
@@ -466,24 +500,14 @@ KernelReachCounts compare_kernel_reach(const std::vector<testing::Case3>& cases,
   const Windows half{0.5, 0.5};
   KernelReachCounts counts;
   for (const auto& c : cases) {
-    const geometry::SceneDesc scene = testing::with_triangles(c.scene);
-    const grid::Lattice3 lattice = scene_lattice<3>(scene, c.options);
-    const std::vector<int> levels = pipeline::effective_levels3(scene, lattice, pipeline::holding_boxes(scene));
-    const geometry::Oracle3 oracle(scene);
-    const InclusionIndex3 index(scene, lattice, GhostRule{});
-    pipeline::GhostSides whole_domain{};
-    for (int d = 0; d < 3; ++d)
-      whole_domain[static_cast<std::size_t>(d)] = {static_cast<int>(lattice.coarse_cells[d]), static_cast<int>(lattice.coarse_cells[d])};
-    const std::array<int, 3> split{3, 3, 2};
+    const ReachScene r(c);
+    const grid::Lattice3& lattice = r.lattice;
+    const std::vector<int>& levels = r.levels;
+    const geometry::Oracle3& oracle = r.oracle;
+    const InclusionIndex3& index = r.index;
+    const pipeline::GhostSides& whole_domain = r.whole_domain;
     for (int b : boxes) {
-      grid::CellRange<3> box;
-      for (int d = 0, rest = b; d < 3; ++d) {
-        const int i = rest % split[static_cast<std::size_t>(d)];
-        rest /= split[static_cast<std::size_t>(d)];
-        const std::int64_t n = lattice.coarse_cells[d];
-        box.lo[d] = n * i / split[static_cast<std::size_t>(d)];
-        box.hi[d] = n * (i + 1) / split[static_cast<std::size_t>(d)];
-      }
+      const grid::CellRange<3> box = split_box(lattice, b);
       const auto mesh = [&](const Windows* w, bool guard_on_box_only = false) {
         pipeline::Ghost ghost{whole_domain, -1, -1};
         if (w != nullptr) {  // the windows in fine units, at the level that decides near the box
@@ -578,14 +602,12 @@ ExchangedWindowCounts compare_exchanged_windows(const std::vector<testing::Case3
   int& own_refusals_differ = counts.own_refusals_differ;
   std::int64_t& nodes_compared = counts.nodes_compared;
   for (const auto& c : cases) {
-    const geometry::SceneDesc scene = testing::with_triangles(c.scene);
-    const grid::Lattice3 lattice = scene_lattice<3>(scene, c.options);
-    const std::vector<int> levels = pipeline::effective_levels3(scene, lattice, pipeline::holding_boxes(scene));
-    const geometry::Oracle3 oracle(scene);
-    const InclusionIndex3 index(scene, lattice, GhostRule{});
-    pipeline::GhostSides whole_domain{};
-    for (int d = 0; d < 3; ++d)
-      whole_domain[static_cast<std::size_t>(d)] = {static_cast<int>(lattice.coarse_cells[d]), static_cast<int>(lattice.coarse_cells[d])};
+    const ReachScene r(c);
+    const grid::Lattice3& lattice = r.lattice;
+    const std::vector<int>& levels = r.levels;
+    const geometry::Oracle3& oracle = r.oracle;
+    const InclusionIndex3& index = r.index;
+    const pipeline::GhostSides& whole_domain = r.whole_domain;
     grid::CellRange<3> domain;
     for (int d = 0; d < 3; ++d) domain.lo[d] = 0, domain.hi[d] = lattice.coarse_cells[d];
     // The whole run, its first-pass refusals kept (what the owners send).
@@ -599,16 +621,8 @@ ExchangedWindowCounts compare_exchanged_windows(const std::vector<testing::Case3
     pipeline::snap3_second(whole, c.options);
     GhostRule exchanging;
     exchanging.exchange = true;
-    const std::array<int, 3> split{3, 3, 2};
     for (int b : boxes) {
-      grid::CellRange<3> box;
-      for (int d = 0, rest = b; d < 3; ++d) {
-        const int i = rest % split[static_cast<std::size_t>(d)];
-        rest /= split[static_cast<std::size_t>(d)];
-        const std::int64_t n = lattice.coarse_cells[d];
-        box.lo[d] = n * i / split[static_cast<std::size_t>(d)];
-        box.hi[d] = n * (i + 1) / split[static_cast<std::size_t>(d)];
-      }
+      const grid::CellRange<3> box = split_box(lattice, b);
       const GhostRegion3 region = ghost_region3(index, lattice, box, exchanging, levels);
       if (!region.exchange) continue;  // no inclusion near the box: nothing snaps there
       const grid::LeafWindow closed = grid::LeafWindow::around(lattice, box, 0);
