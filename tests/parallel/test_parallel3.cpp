@@ -500,12 +500,8 @@ KernelReachCounts compare_kernel_reach(const std::vector<testing::Case3>& cases,
   const Windows half{0.5, 0.5};
   KernelReachCounts counts;
   for (const auto& c : cases) {
-    const ReachScene r(c);
-    const grid::Lattice3& lattice = r.lattice;
-    const std::vector<int>& levels = r.levels;
-    const geometry::Oracle3& oracle = r.oracle;
-    const InclusionIndex3& index = r.index;
-    const pipeline::GhostSides& whole_domain = r.whole_domain;
+    const ReachScene reach_scene(c);
+    const auto& [scene, lattice, levels, oracle, index, whole_domain] = reach_scene;
     for (int b : boxes) {
       const grid::CellRange<3> box = split_box(lattice, b);
       const auto mesh = [&](const Windows* w, bool guard_on_box_only = false) {
@@ -602,12 +598,8 @@ ExchangedWindowCounts compare_exchanged_windows(const std::vector<testing::Case3
   int& own_refusals_differ = counts.own_refusals_differ;
   std::int64_t& nodes_compared = counts.nodes_compared;
   for (const auto& c : cases) {
-    const ReachScene r(c);
-    const grid::Lattice3& lattice = r.lattice;
-    const std::vector<int>& levels = r.levels;
-    const geometry::Oracle3& oracle = r.oracle;
-    const InclusionIndex3& index = r.index;
-    const pipeline::GhostSides& whole_domain = r.whole_domain;
+    const ReachScene reach_scene(c);
+    const auto& [scene, lattice, levels, oracle, index, whole_domain] = reach_scene;
     grid::CellRange<3> domain;
     for (int d = 0; d < 3; ++d) domain.lo[d] = 0, domain.hi[d] = lattice.coarse_cells[d];
     // The whole run, its first-pass refusals kept (what the owners send).
