@@ -7,9 +7,7 @@
 set -u
 cisamr=$1 source_dir=$2 mpiexec=${3:-}
 check=$source_dir/tests/e2e/boundary_sets_check.py
-dir=$(mktemp -d)
-trap 'rm -rf "$dir"' EXIT
-fail() { echo "FAIL: $*"; exit 1; }
+. "$(dirname "$0")/common.sh"
 run_mpi() { local n=$1; shift; timeout 60 "$mpiexec" -n "$n" --oversubscribe --allow-run-as-root "$@"; }
 # Sorted "NAME size" lines of an .inp's node sets and element sets (meshio).
 inp_sets() {

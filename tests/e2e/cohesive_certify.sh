@@ -11,9 +11,7 @@
 # usage: cohesive_certify.sh CISAMR SOURCE_DIR [MPIEXEC]
 set -u
 cisamr=$1 source_dir=$2 mpiexec=${3:-}
-dir=$(mktemp -d)
-trap 'rm -rf "$dir"' EXIT
-fail() { echo "FAIL: $*"; exit 1; }
+. "$(dirname "$0")/common.sh"
 
 # Edits one cohesive cell of a file: drop it, move its first top node by 1e-7 in x, or
 # swap its bottom and top nodes (in every format the file order holds the bottom's nodes

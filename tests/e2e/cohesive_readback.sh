@@ -17,9 +17,7 @@
 # usage: cohesive_readback.sh CISAMR SOURCE_DIR
 set -u
 cisamr=$1 source_dir=$2
-dir=$(mktemp -d)
-trap 'rm -rf "$dir"' EXIT
-fail() { echo "FAIL: $*"; exit 1; }
+. "$(dirname "$0")/common.sh"
 check='
 import sys, meshio, numpy as np
 m = meshio.read(sys.argv[1])

@@ -9,9 +9,7 @@ set -u
 cisamr=$1 source_dir=$2
 fe=$source_dir/validation/fe/cisamr_fe.py
 command -v ccx > /dev/null || { echo "ccx (CalculiX) not found: skipped"; exit 77; }
-dir=$(mktemp -d)
-trap 'rm -rf "$dir"' EXIT
-fail() { echo "FAIL: $*"; exit 1; }
+. "$(dirname "$0")/common.sh"
 # check JSON EXPRESSION MESSAGE: the expression, over the result r, must hold.
 check() {
   /usr/bin/python3 -c 'import json, sys

@@ -8,10 +8,8 @@
 # usage: findings_geometry.sh CISAMR [MPIEXEC]
 set -u
 cisamr=$1 mpiexec=${2:-}
-dir=$(mktemp -d)
-trap 'rm -rf "$dir"' EXIT
+. "$(dirname "$0")/common.sh"
 cd "$dir" || exit 1
-fail() { echo "FAIL: $*"; exit 1; }
 
 scene2() {  # NAME INCLUSIONS: a 10×10 domain
   cat > "$1.json" << END

@@ -12,10 +12,8 @@
 set -u
 cisamr=$1 mpiexec=${2:-}
 py=/usr/bin/python3  # Debian's python, where meshio and vtk live
-dir=$(mktemp -d)
-trap 'rm -rf "$dir"' EXIT
+. "$(dirname "$0")/common.sh"
 cd "$dir" || exit 1
-fail() { echo "FAIL: $*"; exit 1; }
 for tool in gmsh tetgen; do
   command -v $tool > /dev/null || fail "$tool is missing (scripts/install-deps.sh installs it)"
 done

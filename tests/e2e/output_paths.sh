@@ -9,10 +9,8 @@ set -u
 cisamr=$1 source_dir=$2 mpiexec=${3:-}
 composite=$source_dir/data/examples/composite.json
 spheres=$source_dir/data/examples/spheres3d.json
-dir=$(mktemp -d)
-trap 'rm -rf "$dir"' EXIT
+. "$(dirname "$0")/common.sh"
 cd "$dir" || exit 1  # so that a file wrongly named `-` would land here
-fail() { echo "FAIL: $*"; exit 1; }
 is_json() { python3 -c 'import json, sys; json.load(open(sys.argv[1]))' "$1" 2> /dev/null; }
 # Hidden files anywhere under the folder: a temporary left behind.
 no_hidden() { local left; left=$(find "$1" -name '.*' ! -name . | head -3); [ -z "$left" ] || fail "$2: left behind: $left"; }

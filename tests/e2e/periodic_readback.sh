@@ -12,9 +12,7 @@
 # usage: periodic_readback.sh CISAMR [MPIEXEC]
 set -u
 cisamr=$1 mpiexec=${2:-}
-dir=$(mktemp -d)
-trap 'rm -rf "$dir"' EXIT
-fail() { echo "FAIL: $*"; exit 1; }
+. "$(dirname "$0")/common.sh"
 cat > "$dir/rve2.json" <<'JSON'
 {"format": "cisamr-scene/1", "dimension": 2,
  "domain": {"min": [0, 0], "max": [10, 10], "periodic": true}, "mesh": {"h": 0.5, "levels": 2},
