@@ -324,7 +324,8 @@ std::variant<MeshRun<2>, MeshRun<3>> mesh_scene(const Comm& comm, const std::str
                                 .partitioning = {},
                                 .ghost = options.ghost,
                                 .exchange_near_faces = exchange_fits(estimate, options, partitions, comm.size())};
-        if (Dim == 3 && options.exchange_near_faces && !o.exchange_near_faces && run.options.stream.empty() && run.note.empty())
+        if (Dim == 3 && options.exchange_near_faces && !o.exchange_near_faces && run.options.stream.empty() &&
+            !run.any_periodic() && run.note.empty())  // (periodic and streamed runs never exchange)
           run.note = "the mesh would have about " + about(estimate.total()) + " elements: too many to hold every one of " +
                      std::to_string(partitions) + " partitions between the kernel's parts, so their decisions near faces "
                      "are recomputed one partition at a time (fewer --partitions, or --max-elements, allow the exchange)";

@@ -11,17 +11,13 @@
 namespace cisamr::pipeline {
 namespace {
 
-grid::LeafWindow window_of(const grid::Lattice3& lattice, const grid::CellRange<3>& box, std::int64_t reach) {
-  return grid::LeafWindow::around(lattice, box, reach);
-}
-
 // SAMR, then r-adaptivity up to its guard's first pass; their times and counters added to
 // `result`.
 Snapped3 snap_first_half(const geometry::Oracle3& oracle, const grid::Lattice3& lattice, const grid::CellRange<3>& box,
                          const Ghost& ghost, const Options& options, std::span<const int> levels, Result<3> result) {
   Counters<3>& counters = result.counters;
   const grid::CellRange<3> range = ghosted_range(lattice, box, ghost.sides);
-  const auto window = [&](std::int64_t reach) { return window_of(lattice, box, reach); };
+  const auto window = [&](std::int64_t reach) { return grid::LeafWindow::around(lattice, box, reach); };
   // On the heap: r-adaptivity's state refers to it while a Snapped3 moves.
   auto grid = [&] {
     ScopedPhase timer(&result.times, "samr");
@@ -88,7 +84,7 @@ MeshParts<3> finish_stages(const geometry::Oracle3& oracle, const grid::Lattice3
   const faceswap::Swaps3 swaps = [&] {
     ScopedPhase timer(&result.times, "faceswap");
     return faceswap::swap3(oracle, grid, nodes, faceswap::Options3{.trigger = options.swap_trigger3,
-                                                                      .window = window_of(lattice, box, ghost.swap_reach),
+                                                                      .window = grid::LeafWindow::around(lattice, box, ghost.swap_reach),
                                                                       .progress = options.progress});
   }();
   release_free_memory();
