@@ -119,11 +119,14 @@ std::string report(const MeshRun<Dim>& run, const std::string& scene_path, const
     const parallel::Spread cost = parallel::spread_of(m.partitions, &parallel::PartitionSummary::cost);
     j["partition_method"] = m.partition_method;
     j["ghost_rule"] = ghost_rule(Dim, run.options.ghost);
-    // 3D: whether the decisions near faces were exchanged after r-adaptivity or recomputed
-    // in a wider ghost (lib/parallel/README.md), and how many nodes took their owner's.
+    // 3D: whether the forest and the decisions near faces were exchanged or recomputed in a
+    // wider ghost (lib/parallel/README.md), how many cubes and nodes took their owner's, and
+    // how many cubes' own refinement differed.
     if constexpr (Dim == 3) {
       j["near_faces"] = m.near_faces_exchanged ? "exchanged" : "recomputed";
       j["exchanged_nodes"] = m.exchanged_nodes;
+      j["exchanged_cubes"] = m.exchanged_cubes;
+      j["replaced_cubes"] = m.replaced_cubes;
     }
     // The cuts balance the cost (the load plus, in 3D, the ghost's weighted load), so the
     // loads alone may differ more.

@@ -225,4 +225,16 @@ std::int32_t TetForest::refine(std::int32_t t) {
   return first;
 }
 
+void TetForest::append_refinement(std::int32_t t, std::vector<std::uint8_t>& out) const {
+  std::vector<std::int32_t> stack{t};
+  while (!stack.empty()) {
+    const std::int32_t u = stack.back();
+    stack.pop_back();
+    const Tet& x = tets_[static_cast<std::size_t>(u)];
+    out.push_back(x.first_child < 0 ? 0 : 1);
+    if (x.first_child < 0) continue;
+    for (int c = tet::child_count(kind_of_local(x.local)) - 1; c >= 0; --c) stack.push_back(x.first_child + c);
+  }
+}
+
 }  // namespace cisamr::grid

@@ -109,6 +109,11 @@ class TetForest {
   // Splits leaf t into its 7 or 12 children; returns the index of the first child.
   std::int32_t refine(std::int32_t t);
 
+  // Appends the refinement of the tree below tet t in pre-order, children in their table
+  // order: 1 for a refined tet, 0 for a leaf. Two forests hold the same tets below two
+  // tets of one code exactly when these agree (the codes follow from the tables).
+  void append_refinement(std::int32_t t, std::vector<std::uint8_t>& out) const;
+
  private:
   Lattice3 lattice_;
   CellRange<3> range_;

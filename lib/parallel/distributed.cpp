@@ -421,9 +421,9 @@ DistributedMesh<Dim> mesh_partitions(const Comm& comm, geometry::SceneDesc scene
           prepare(p);
           const auto t0 = std::chrono::steady_clock::now();
           const GhostRegion3& region = regions[static_cast<std::size_t>(p - first)];
-          snapped.push_back(pipeline::snap3_first(*oracles[static_cast<std::size_t>(p - first)], lattice, region.box,
-                                                  kernel_ghost(region), kernel_options,
-                                                  region_levels[static_cast<std::size_t>(p - first)]));
+          snapped.push_back(pipeline::refine3_part(*oracles[static_cast<std::size_t>(p - first)], lattice, region.box,
+                                                   kernel_ghost(region), kernel_options,
+                                                   region_levels[static_cast<std::size_t>(p - first)]));
           kernel_seconds[static_cast<std::size_t>(p - first)] = seconds_since(t0);
         }
       });
@@ -435,6 +435,29 @@ DistributedMesh<Dim> mesh_partitions(const Comm& comm, geometry::SceneDesc scene
         const GhostRegion3& region = regions[static_cast<std::size_t>(p - first)];
         waiting.push_back({p, region.exchange, region.second_pass_reach, &snapped[static_cast<std::size_t>(p - first)]});
       }
+      std::vector<std::vector<samr::CubeRefinement>> owners_cubes;
+      {
+        ScopedPhase timer(&out.times, "exchange");
+        std::int64_t cubes = 0;
+        owners_cubes = exchange_forests(comm, all_boxes, waiting, cubes);
+        out.exchanged_cubes = comm.allreduce_sum(cubes);
+      }
+      std::int64_t replaced = 0;
+      run_collectively(comm, [&] {
+        for (int p = first; p < last; ++p) {
+          const auto i = static_cast<std::size_t>(p - first);
+          const auto t0 = std::chrono::steady_clock::now();
+          const GhostRegion3& region = regions[i];
+          {
+            ScopedPhase timer(&snapped[i].result.times, "samr");
+            replaced += samr::take_cube_refinements(*oracles[i], *snapped[i].grid, owners_cubes[i]);
+          }
+          std::vector<samr::CubeRefinement>().swap(owners_cubes[i]);
+          pipeline::snap3_first(*oracles[i], lattice, region.box, kernel_ghost(region), kernel_options, snapped[i]);
+          kernel_seconds[i] += seconds_since(t0);
+        }
+      });
+      out.replaced_cubes = comm.allreduce_sum(replaced);
       {
         ScopedPhase timer(&out.times, "exchange");
         out.exchanged_nodes = comm.allreduce_sum(exchange_first_pass_refusals(comm, lattice, all_boxes, waiting));

@@ -110,6 +110,8 @@ struct DistributedMesh {
   pipeline::Counters<Dim> counters;  // over all partitions of all ranks (coarse cells: the boxes')
   bool near_faces_exchanged = false;  // 3D: the decisions near faces were exchanged (MeshOptions::exchange_near_faces)
   std::int64_t exchanged_nodes = 0;   // nodes that took their owner's refusals or decisions (all ranks, both rounds)
+  std::int64_t exchanged_cubes = 0;   // ghost cubes whose refinement came from their owner (all ranks)
+  std::int64_t replaced_cubes = 0;    // of those, the cubes whose own refinement differed
   PhaseTimes times;                 // this rank's phase times
 };
 using DistributedMesh2 = DistributedMesh<2>;

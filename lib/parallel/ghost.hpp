@@ -89,11 +89,13 @@ static_assert(kExchangedRadaptWindow3 == 1 && kExchangedFirstPassWindow3 == 0 &&
 // number greater than samr::reach_coarse_cells3(max_level) + kKernelReach3 / 2^level (greater:
 // the first layer's far face may hold midpoints the partition lacks), the kernel's reach
 // counted in cells of its level (level 2: 1 + 1.25 → 3): 7 at level 0, 4 at level 1, 3 at
-// level 2, 2 from level 3 on; 6 when nothing refines (Lmax 0). With the decisions near faces
-// exchanged, the least whole number not below samr::reach_coarse_cells3(max_level) +
-// kExchangedKernelReach3 / 2^level (not below: what the partition reads on the first layer's
-// far face, the nodes' decisions and the finest level around them, comes from their owners):
-// 3 at level 0, 2 from level 1 on; 2 when nothing refines.
+// level 2, 2 from level 3 on; 6 when nothing refines (Lmax 0). With the forest and the
+// decisions near faces exchanged, SAMR's reach and the kernel's no longer add up: the box's
+// forest is right with samr::reach_coarse_cells3(max_level) cubes around it, the ghost's
+// cubes then take their owners' trees, and the kernel reads kExchangedKernelReach3 / 2^level
+// cubes out (up to the region's outer face: what it reads there, the nodes' decisions and the
+// finest level around them, comes from their owners). The least whole number not below
+// either: 2 at level 0, 1 from level 1 on; 2 when nothing refines.
 int ghost_margin3(int level, int max_level = 64, bool exchanged = false);
 
 struct GhostRule {

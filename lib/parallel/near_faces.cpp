@@ -125,6 +125,91 @@ struct Decision {
 
 }  // namespace
 
+std::vector<std::vector<samr::CubeRefinement>> exchange_forests(const Comm& comm, const std::vector<grid::CellRange<3>>& boxes,
+                                                                std::span<SnappedPartition> mine, std::int64_t& cubes) {
+  const int ranks = comm.size();
+  const int partitions = static_cast<int>(boxes.size());
+  const auto holds = [](const grid::CellRange<3>& b, const std::array<std::int64_t, 3>& c) {
+    for (int d = 0; d < 3; ++d)
+      if (c[static_cast<std::size_t>(d)] < b.lo[d] || c[static_cast<std::size_t>(d)] >= b.hi[d]) return false;
+    return true;
+  };
+  const auto meets = [](const grid::CellRange<3>& a, const grid::CellRange<3>& b) {
+    for (int d = 0; d < 3; ++d)
+      if (a.hi[d] <= b.lo[d] || b.hi[d] <= a.lo[d]) return false;
+    return true;
+  };
+  // Questions per owner's rank: (owner partition, cube); what each asked for: (position in
+  // `mine`, cube), in the same order.
+  std::vector<Packer> ask(static_cast<std::size_t>(ranks));
+  std::vector<std::vector<std::pair<std::int32_t, std::array<std::int64_t, 3>>>> asked(static_cast<std::size_t>(ranks));
+  run_collectively(comm, [&] {
+    std::vector<int> neighbours;
+    for (std::size_t i = 0; i < mine.size(); ++i) {
+      if (!mine[i].asks) continue;
+      const grid::CellRange<3>& own = boxes[static_cast<std::size_t>(mine[i].id)];
+      const grid::CellRange<3>& range = mine[i].snapped->grid->forest.range();
+      neighbours.clear();
+      for (int q = 0; q < partitions; ++q)
+        if (q != mine[i].id && meets(boxes[static_cast<std::size_t>(q)], range)) neighbours.push_back(q);
+      for (std::int64_t ck = range.lo[2]; ck < range.hi[2]; ++ck)
+        for (std::int64_t cj = range.lo[1]; cj < range.hi[1]; ++cj)
+          for (std::int64_t ci = range.lo[0]; ci < range.hi[0]; ++ci) {
+            const std::array<std::int64_t, 3> cube{ci, cj, ck};
+            if (holds(own, cube)) continue;
+            const auto owner = std::find_if(neighbours.begin(), neighbours.end(),
+                                            [&](int q) { return holds(boxes[static_cast<std::size_t>(q)], cube); });
+            CISAMR_CHECK(owner != neighbours.end(), "exchange near faces: a cube in no partition's box");
+            const auto r = static_cast<std::size_t>(rank_of_partition(*owner, partitions, ranks));
+            ask[r].put<std::int32_t>(*owner);
+            ask[r].put(cube);
+            asked[r].emplace_back(static_cast<std::int32_t>(i), cube);
+          }
+    }
+  });
+  std::vector<Bytes> questions(static_cast<std::size_t>(ranks));
+  for (int r = 0; r < ranks; ++r) questions[static_cast<std::size_t>(r)] = ask[static_cast<std::size_t>(r)].take();
+  const std::vector<Bytes> received = comm.alltoallv(questions);
+
+  const int first = mine.empty() ? 0 : mine.front().id;
+  std::vector<Bytes> answers(static_cast<std::size_t>(ranks));
+  run_collectively(comm, [&] {
+    std::vector<std::uint8_t> bits;
+    for (int r = 0; r < ranks; ++r) {
+      Unpacker u(received[static_cast<std::size_t>(r)]);
+      Packer answer;
+      while (!u.done()) {
+        const auto owner = u.get<std::int32_t>();
+        const auto cube = u.get<std::array<std::int64_t, 3>>();
+        const auto j = static_cast<std::size_t>(owner - first);
+        CISAMR_CHECK(j < mine.size() && mine[j].id == owner, "exchange near faces: a question for another rank's partition");
+        const samr::RefinedGrid3& grid = *mine[j].snapped->grid;
+        const std::int64_t at = grid.cube_index(cube[0], cube[1], cube[2]);
+        CISAMR_CHECK(at >= 0 && holds(boxes[static_cast<std::size_t>(owner)], cube), "exchange near faces: a cube outside its owner's box");
+        bits.clear();
+        for (int local = 0; local < 5; ++local) grid.forest.append_refinement(static_cast<std::int32_t>(5 * at + local), bits);
+        answer.put_vector(bits);
+      }
+      answers[static_cast<std::size_t>(r)] = answer.take();
+    }
+  });
+  const std::vector<Bytes> replies = comm.alltoallv(answers);
+
+  std::vector<std::vector<samr::CubeRefinement>> taken(mine.size());
+  cubes = 0;
+  run_collectively(comm, [&] {
+    for (int r = 0; r < ranks; ++r) {
+      Unpacker u(replies[static_cast<std::size_t>(r)]);
+      for (const auto& [i, cube] : asked[static_cast<std::size_t>(r)]) {
+        taken[static_cast<std::size_t>(i)].push_back({cube, u.get_vector<std::uint8_t>()});
+        ++cubes;
+      }
+      CISAMR_CHECK(u.done(), "exchange near faces: more answers than questions");
+    }
+  });
+  return taken;
+}
+
 std::int64_t exchange_first_pass_refusals(const Comm& comm, const grid::Lattice<3>& lattice,
                                           const std::vector<grid::CellRange<3>>& boxes, std::span<SnappedPartition> mine) {
   // Per partition, the nodes the second pass's leaves hold.

@@ -1,8 +1,9 @@
 #pragma once
-// The 3D decisions near faces, exchanged between partitions during the kernel (README.md,
-// "Decisions exchanged near faces"). Each partition takes, for its nodes outside its closed
-// box, what the partition of the lowest id whose closed box holds the node decided there on
-// its own data. Answers are read before any node is overwritten.
+// The 3D forest and decisions near faces, exchanged between partitions during the kernel
+// (README.md, "Decisions exchanged near faces"). Each partition takes, for its cubes outside
+// its box, the refinement of the partition whose box holds the cube, and for its nodes
+// outside its closed box, what the partition of the lowest id whose closed box holds the
+// node decided there on its own data. Answers are read before anything is overwritten.
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -20,6 +21,14 @@ struct SnappedPartition {
   std::int64_t second_pass_reach = -1;  // GhostRegion::second_pass_reach (fine lattice units)
   pipeline::Snapped3* snapped = nullptr;
 };
+
+// Collective, between pipeline::refine3_part and snap3_first: for every coarse cube of its
+// forest's range outside its box, a partition that asks takes the refinement of the
+// partition whose box holds the cube (which refined it as the whole run does). Returns per
+// partition of `mine` what it took (samr::take_cube_refinements applies it); `cubes` counts
+// them.
+std::vector<std::vector<samr::CubeRefinement>> exchange_forests(const Comm& comm, const std::vector<grid::CellRange<3>>& boxes,
+                                                                std::span<SnappedPartition> mine, std::int64_t& cubes);
 
 // Collective, between pipeline::snap3_first and snap3_second: the guard's first-pass
 // refusals of the options of every node outside the closed box that a leaf of the second

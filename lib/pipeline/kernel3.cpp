@@ -11,30 +11,36 @@
 namespace cisamr::pipeline {
 namespace {
 
-// SAMR, then r-adaptivity up to its guard's first pass; their times and counters added to
-// `result`.
-Snapped3 snap_first_half(const geometry::Oracle3& oracle, const grid::Lattice3& lattice, const grid::CellRange<3>& box,
-                         const Ghost& ghost, const Options& options, std::span<const int> levels, Result<3> result) {
-  Counters<3>& counters = result.counters;
+// SAMR; its time added to `result`. The forest keeps its cut lists (take_cube_refinements).
+Snapped3 refine_stage(const geometry::Oracle3& oracle, const grid::Lattice3& lattice, const grid::CellRange<3>& box,
+                      const Ghost& ghost, const Options& options, std::span<const int> levels, Result<3> result) {
   const grid::CellRange<3> range = ghosted_range(lattice, box, ghost.sides);
-  const auto window = [&](std::int64_t reach) { return grid::LeafWindow::around(lattice, box, reach); };
   // On the heap: r-adaptivity's state refers to it while a Snapped3 moves.
   auto grid = [&] {
     ScopedPhase timer(&result.times, "samr");
     return std::make_unique<samr::RefinedGrid3>(samr::refine3(oracle, lattice, range, levels, options.progress));
   }();
+  return Snapped3{std::move(grid), std::nullopt, {}, std::move(result)};
+}
+
+// r-adaptivity up to its guard's first pass on the refined forest; SAMR's counters and
+// r-adaptivity's time added to the result.
+void snap_first_half(const geometry::Oracle3& oracle, const grid::Lattice3& lattice, const grid::CellRange<3>& box,
+                     const Ghost& ghost, const Options& options, Snapped3& snapped) {
+  const auto window = [&](std::int64_t reach) { return grid::LeafWindow::around(lattice, box, reach); };
+  samr::RefinedGrid3& grid = *snapped.grid;
   // After each stage: what it freed goes back to the system (hash-map nodes would stay
   // resident in the heap, under the next stage's arrays), and the forest keeps only what
   // the later stages read (validation/bench/MEMORY.md).
-  grid->release_lists();
+  grid.release_lists();
   release_free_memory();
+  Counters<3>& counters = snapped.result.counters;
+  const grid::CellRange<3>& range = grid.forest.range();
   counters.coarse_cells = range.count(0) * range.count(1) * range.count(2);
-  counters.refinements = grid->refinements;
-  counters.samr_sweeps = grid->sweeps;
-  for (std::int32_t t = 0; t < static_cast<std::int32_t>(grid->forest.size()); ++t)
-    counters.leaves += grid->forest.is_leaf(t) ? 1 : 0;
-
-  Snapped3 snapped{std::move(grid), std::nullopt, {}, std::move(result)};
+  counters.refinements = grid.refinements;
+  counters.samr_sweeps = grid.sweeps;
+  for (std::int32_t t = 0; t < static_cast<std::int32_t>(grid.forest.size()); ++t)
+    counters.leaves += grid.forest.is_leaf(t) ? 1 : 0;
   {
     ScopedPhase timer(&snapped.result.times, "radapt");
     snapped.snapping.emplace(oracle, *snapped.grid,
@@ -46,7 +52,6 @@ Snapped3 snap_first_half(const geometry::Oracle3& oracle, const grid::Lattice3& 
                                               .second_pass_window = window(ghost.second_pass_reach),
                                               .progress = options.progress});
   }
-  return snapped;
 }
 
 // The guard's second pass and every node's decision.
@@ -115,17 +120,31 @@ MeshParts<3> finish_stages(const geometry::Oracle3& oracle, const grid::Lattice3
 
 MeshParts<3> run_stages(const geometry::Oracle3& oracle, const grid::Lattice3& lattice, const grid::CellRange<3>& box,
                         const Ghost& ghost, const Options& options, std::span<const int> levels, Result<3>& result) {
-  Snapped3 snapped = snap_first_half(oracle, lattice, box, ghost, options, levels, std::move(result));
+  Snapped3 snapped = refine_stage(oracle, lattice, box, ghost, options, levels, std::move(result));
+  snap_first_half(oracle, lattice, box, ghost, options, snapped);
   snap_second_half(snapped);
   result = std::move(snapped.result);
   return finish_stages(oracle, lattice, box, ghost, options, std::move(snapped.grid), std::move(snapped.nodes), result);
 }
 
-Snapped3 snap3_first(const geometry::Oracle3& oracle, const grid::Lattice<3>& lattice, const grid::CellRange<3>& box,
-                     const Ghost& ghost, const Options& options, std::span<const int> levels) {
+Snapped3 refine3_part(const geometry::Oracle3& oracle, const grid::Lattice<3>& lattice, const grid::CellRange<3>& box,
+                      const Ghost& ghost, const Options& options, std::span<const int> levels) {
   Result<3> result;
   result.times.progress = options.progress;
-  return snap_first_half(oracle, lattice, box, ghost, options, levels, std::move(result));
+  return refine_stage(oracle, lattice, box, ghost, options, levels, std::move(result));
+}
+
+void snap3_first(const geometry::Oracle3& oracle, const grid::Lattice<3>& lattice, const grid::CellRange<3>& box,
+                 const Ghost& ghost, const Options& options, Snapped3& refined) {
+  refined.result.times.progress = options.progress;
+  snap_first_half(oracle, lattice, box, ghost, options, refined);
+}
+
+Snapped3 snap3_first(const geometry::Oracle3& oracle, const grid::Lattice<3>& lattice, const grid::CellRange<3>& box,
+                     const Ghost& ghost, const Options& options, std::span<const int> levels) {
+  Snapped3 snapped = refine3_part(oracle, lattice, box, ghost, options, levels);
+  snap3_first(oracle, lattice, box, ghost, options, snapped);
+  return snapped;
 }
 
 void snap3_second(Snapped3& snapped, const Options& options) {

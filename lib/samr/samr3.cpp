@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <stdexcept>
 
+#include "core/check.hpp"
 #include "core/error.hpp"
 
 namespace cisamr::samr {
@@ -113,6 +114,66 @@ constexpr std::array<std::array<int, 4>, 24> kQuarterProbes = [] {
     }
   return p;
 }();
+
+// The points of the refinement template of a tet with vertices v (vertices, edge
+// midpoints, centre).
+std::array<LatticePoint3, 11> template_points(const std::array<LatticePoint3, 4>& v) {
+  std::array<LatticePoint3, 11> points{};
+  for (int i = 0; i < 4; ++i) points[i] = v[i];
+  for (int e = 0; e < 6; ++e)
+    for (int d = 0; d < 3; ++d) points[tet::midpoint(e)][d] = (v[tet::kEdges[e][0]][d] + v[tet::kEdges[e][1]][d]) / 2;
+  for (int d = 0; d < 3; ++d) points[tet::kCentroid][d] = (v[0][d] + v[1][d] + v[2][d] + v[3][d]) / 4;
+  return points;
+}
+
+// Appends the cut lists of the children of t, just refined (the first at `first`; `points`:
+// t's template_points): the parent's inclusions that touch the child's box. Several children share a box (a corner
+// tet's 7 children have 4 boxes, a regular tet's 12 have 8), and boundary_touches depends
+// only on the inclusion and the box.
+void append_child_touches(const geometry::Oracle3& oracle, RefinedGrid3& g, std::int32_t t, std::int32_t first,
+                          const std::array<LatticePoint3, 11>& points) {
+  CISAMR_CHECK(g.touch_begin.size() == static_cast<std::size_t>(first), "SAMR: cut lists out of step with the forest");
+  const bool corner = g.forest.kind(t) == tet::Kind::corner;
+  const int children = g.forest.child_count(t);
+  const std::int32_t begin = g.touch_begin[static_cast<std::size_t>(t)];
+  const std::uint16_t count = g.touch_count[static_cast<std::size_t>(t)];
+  std::array<std::pair<LatticePoint3, LatticePoint3>, 12> bounds{};
+  for (int c = 0; c < children; ++c) {
+    const auto& child_points = corner ? tet::kCornerChildren[c] : tet::kRegularChildren[c];
+    LatticePoint3 lo = points[child_points[0]], hi = lo;
+    for (int i = 1; i < 4; ++i)
+      for (int d = 0; d < 3; ++d)
+        lo[d] = std::min(lo[d], points[child_points[i]][d]), hi[d] = std::max(hi[d], points[child_points[i]][d]);
+    bounds[c] = {lo, hi};
+    int same = 0;
+    while (same < c && bounds[same] != bounds[c]) ++same;
+    g.touch_begin.push_back(static_cast<std::int32_t>(g.touch_pool.size()));
+    std::uint16_t n = 0;
+    if (same < c) {  // a sibling with the same box: same list
+      const std::int32_t from = g.touch_begin[static_cast<std::size_t>(first + same)];
+      n = g.touch_count[static_cast<std::size_t>(first + same)];
+      for (std::uint16_t i = 0; i < n; ++i) g.touch_pool.push_back(g.touch_pool[static_cast<std::size_t>(from + i)]);
+    } else if (count > 0) {
+      const Box3 box{g.forest.position(lo), g.forest.position(hi)};
+      for (std::uint16_t i = 0; i < count; ++i) {
+        const std::int32_t k = g.touch_pool[static_cast<std::size_t>(begin + i)];
+        if (oracle.boundary_touches(k, box)) {
+          g.touch_pool.push_back(k);
+          ++n;
+        }
+      }
+    }
+    g.touch_count.push_back(n);
+  }
+}
+
+// Appends tet t's cut list in `from` as the next tet's in `to`.
+void append_touches_of(const TouchLists& from, std::int32_t t, TouchLists& to) {
+  const auto list = from.touched(t);
+  to.touch_begin.push_back(static_cast<std::int32_t>(to.touch_pool.size()));
+  to.touch_pool.insert(to.touch_pool.end(), list.begin(), list.end());
+  to.touch_count.push_back(static_cast<std::uint16_t>(list.size()));
+}
 
 // Synchronous sweeps (samr3.hpp) that look only at the leaves whose rules may have changed.
 // Synchronous because R4 is not monotone: a node stops being a vertex of a cut leaf when
@@ -270,54 +331,14 @@ class Refiner {
     note_level(t, level + 1);
     queued_.resize(g_.forest.size(), 0);
 
-    // The points of t's refinement template (vertices, edge midpoints, centre).
-    std::array<LatticePoint3, 11> points{};
-    for (int i = 0; i < 4; ++i) points[i] = v[i];
-    for (int e = 0; e < 6; ++e)
-      for (int d = 0; d < 3; ++d)
-        points[tet::midpoint(e)][d] = (v[tet::kEdges[e][0]][d] + v[tet::kEdges[e][1]][d]) / 2;
-    for (int d = 0; d < 3; ++d) points[tet::kCentroid][d] = (v[0][d] + v[1][d] + v[2][d] + v[3][d]) / 4;
-
-    // Cut lists of the children: the parent's inclusions that touch the child's box. Several
-    // children share a box (a corner tet's 7 children have 4 boxes, a regular tet's 12
-    // have 8), and boundary_touches depends only on the inclusion and the box.
-    const std::int32_t begin = g_.touch_begin[static_cast<std::size_t>(t)];
-    const std::uint16_t count = g_.touch_count[static_cast<std::size_t>(t)];
-    std::array<std::pair<LatticePoint3, LatticePoint3>, 12> bounds{};
+    const std::array<LatticePoint3, 11> points = template_points(v);
+    append_child_touches(oracle_, g_, t, first, points);
     std::array<int, 11> cut_delta{};  // change of each point's count of cut leaves
-    if (count > 0)
+    if (g_.is_cut(t))
       for (int i = 0; i < 4; ++i) cut_delta[i] = -1;
     for (int c = 0; c < children; ++c) {
-      const auto& child_points = corner ? tet::kCornerChildren[c] : tet::kRegularChildren[c];
-      LatticePoint3 lo = points[child_points[0]], hi = lo;
-      for (int i = 1; i < 4; ++i)
-        for (int d = 0; d < 3; ++d)
-          lo[d] = std::min(lo[d], points[child_points[i]][d]), hi[d] = std::max(hi[d], points[child_points[i]][d]);
-      bounds[c] = {lo, hi};
-      int same = 0;
-      while (same < c && bounds[same] != bounds[c]) ++same;
-      g_.touch_begin.push_back(static_cast<std::int32_t>(g_.touch_pool.size()));
-      std::uint16_t n = 0;
-      if (same < c) {  // a sibling with the same box: same list
-        const std::int32_t from = g_.touch_begin[static_cast<std::size_t>(first + same)];
-        n = g_.touch_count[static_cast<std::size_t>(first + same)];
-        for (std::uint16_t i = 0; i < n; ++i) {
-          const std::int32_t k = g_.touch_pool[static_cast<std::size_t>(from + i)];
-          g_.touch_pool.push_back(k);
-        }
-      } else if (count > 0) {
-        const Box3 box{g_.forest.position(lo), g_.forest.position(hi)};
-        for (std::uint16_t i = 0; i < count; ++i) {
-          const std::int32_t k = g_.touch_pool[static_cast<std::size_t>(begin + i)];
-          if (oracle_.boundary_touches(k, box)) {
-            g_.touch_pool.push_back(k);
-            ++n;
-          }
-        }
-      }
-      g_.touch_count.push_back(n);
-      if (n > 0)
-        for (std::uint8_t p : child_points) ++cut_delta[p];
+      if (g_.is_cut(first + c))
+        for (std::uint8_t p : corner ? tet::kCornerChildren[c] : tet::kRegularChildren[c]) ++cut_delta[p];
       enqueue(first + c);
     }
 
@@ -433,6 +454,75 @@ RefinedGrid3 refine3(const geometry::Oracle3& oracle, const grid::Lattice3& latt
   }
   Refiner(oracle, g, levels).run(progress);
   return g;
+}
+
+std::int64_t take_cube_refinements(const geometry::Oracle3& oracle, RefinedGrid3& g,
+                                   std::span<const CubeRefinement> taken) {
+  const grid::CellRange<3>& range = g.forest.range();
+  const std::int64_t cubes = range.count(0) * range.count(1) * range.count(2);
+  std::vector<const std::vector<std::uint8_t>*> replaced(static_cast<std::size_t>(cubes), nullptr);
+  std::vector<std::uint8_t> own;
+  std::int64_t differing = 0;
+  for (const CubeRefinement& c : taken) {
+    const std::int64_t at = g.cube_index(c.cube[0], c.cube[1], c.cube[2]);
+    CISAMR_CHECK(at >= 0, "SAMR: a cube refinement outside the forest's range");
+    own.clear();
+    for (int local = 0; local < 5; ++local) g.forest.append_refinement(static_cast<std::int32_t>(5 * at + local), own);
+    if (own == c.bits) continue;
+    replaced[static_cast<std::size_t>(at)] = &c.bits;
+    ++differing;
+  }
+  if (differing == 0) return 0;
+
+  // A new forest: the old one's tets but those of the replaced cubes, in the old order (a
+  // child block is made when the old array reaches it, so the box's cells come out in the
+  // order the sweeps gave them, which the parallel output's node numbering follows), with
+  // their cut lists; then the replaced cubes' trees from their bits in pre-order, copying the
+  // lists of the tets the old forest also has and filtering the parent's for the others, as
+  // the sweeps do.
+  RefinedGrid3 rebuilt{{}, grid::TetForest(g.forest.lattice(), range), std::move(g.cube_candidates), g.refinements, g.sweeps};
+  const std::int32_t roots = g.forest.root_count();
+  for (std::int32_t r = 0; r < roots; ++r) append_touches_of(g, r, rebuilt);
+  std::vector<std::int32_t> kept(g.forest.size(), -1);  // old tet → new tet, -1 in a replaced cube
+  for (std::int32_t r = 0; r < roots; ++r)
+    if (replaced[static_cast<std::size_t>(r / 5)] == nullptr) kept[static_cast<std::size_t>(r)] = r;
+  for (std::int32_t u = roots; u < static_cast<std::int32_t>(g.forest.size()); ++u) {
+    const std::int32_t parent = g.forest.tet(u).parent;
+    if (g.forest.tet(parent).first_child != u || kept[static_cast<std::size_t>(parent)] < 0) continue;
+    const std::int32_t first = rebuilt.forest.refine(kept[static_cast<std::size_t>(parent)]);
+    for (int c = 0; c < g.forest.child_count(parent); ++c) {
+      kept[static_cast<std::size_t>(u + c)] = first + c;
+      append_touches_of(g, u + c, rebuilt);
+    }
+  }
+  std::vector<std::array<std::int32_t, 2>> stack;  // (old tet or -1, new tet)
+  for (std::int64_t cube = 0; cube < cubes; ++cube) {
+    const std::vector<std::uint8_t>* bits = replaced[static_cast<std::size_t>(cube)];
+    if (bits == nullptr) continue;
+    std::size_t next_bit = 0;
+    for (int local = 0; local < 5; ++local) {
+      const auto root = static_cast<std::int32_t>(5 * cube + local);
+      stack.push_back({root, root});
+      while (!stack.empty()) {
+        const auto [old, now] = stack.back();
+        stack.pop_back();
+        CISAMR_CHECK(next_bit < bits->size(), "SAMR: a cube refinement ends early");
+        if ((*bits)[next_bit++] == 0) continue;
+        const bool old_refined = old >= 0 && !g.forest.is_leaf(old);
+        const std::int32_t first = rebuilt.forest.refine(now);
+        const int children = rebuilt.forest.child_count(now);
+        const std::int32_t old_first = old_refined ? g.forest.tet(old).first_child : -1;
+        if (old_refined)
+          for (int c = 0; c < children; ++c) append_touches_of(g, old_first + c, rebuilt);
+        else
+          append_child_touches(oracle, rebuilt, now, first, template_points(rebuilt.forest.fine_vertices(now)));
+        for (int c = children - 1; c >= 0; --c) stack.push_back({old_refined ? old_first + c : -1, first + c});
+      }
+    }
+    CISAMR_CHECK(next_bit == bits->size(), "SAMR: a cube refinement runs past its trees");
+  }
+  g = std::move(rebuilt);
+  return differing;
 }
 
 }  // namespace cisamr::samr

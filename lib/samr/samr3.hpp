@@ -16,6 +16,7 @@
 // on a visiting order. A sweep looks only at the leaves whose rules may have changed (the
 // children of the last refinements and the leaves around their new nodes), which gives
 // the same marks as looking at every leaf (lib/samr/README.md, 3D).
+#include <array>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -80,5 +81,21 @@ struct RefinedGrid3 : TouchLists {
 RefinedGrid3 refine3(const geometry::Oracle3& oracle, const grid::Lattice3& lattice,
                      const grid::CellRange<3>& range, std::span<const int> levels = {},
                      Progress* progress = nullptr);
+
+// A coarse cube's refinement as another forest holds it: TetForest::append_refinement of its
+// five roots in order (global coarse indices).
+struct CubeRefinement {
+  std::array<std::int64_t, 3> cube{};
+  std::vector<std::uint8_t> bits;
+};
+
+// Gives the cubes of `taken` (in g's range) the refinement listed there: the parallel
+// mesher's partitions take the forest near their boxes from the partitions that own it
+// (lib/parallel/README.md, "Decisions exchanged near faces"). Where any differs from g's
+// own, g is rebuilt with every other tree as it was and the cut lists the new trees give
+// (a new tet's list is its parent's filtered as the sweeps filter it), so g must still
+// hold its lists (before release_lists). Returns the cubes that differed.
+std::int64_t take_cube_refinements(const geometry::Oracle3& oracle, RefinedGrid3& g,
+                                   std::span<const CubeRefinement> taken);
 
 }  // namespace cisamr::samr
