@@ -237,4 +237,34 @@ void TetForest::append_refinement(std::int32_t t, std::vector<std::uint8_t>& out
   }
 }
 
+std::vector<std::int32_t> TetForest::prune(std::span<const std::int32_t> roots) {
+  std::vector<std::int32_t> index(tets_.size(), 0);  // first 1 for the dropped tets
+  std::vector<std::int32_t> stack;
+  for (const std::int32_t r : roots) {
+    const Tet& x = tets_[static_cast<std::size_t>(r)];
+    if (x.first_child >= 0)
+      for (int c = 0; c < tet::child_count(kind_of_local(x.local)); ++c) stack.push_back(x.first_child + c);
+    while (!stack.empty()) {
+      const std::int32_t u = stack.back();
+      stack.pop_back();
+      index[static_cast<std::size_t>(u)] = 1;
+      const Tet& y = tets_[static_cast<std::size_t>(u)];
+      if (y.first_child >= 0)
+        for (int c = 0; c < tet::child_count(kind_of_local(y.local)); ++c) stack.push_back(y.first_child + c);
+    }
+  }
+  std::int32_t kept = 0;
+  for (auto& i : index) i = i != 0 ? -1 : kept++;
+  for (std::size_t t = 0; t < tets_.size(); ++t) {
+    const std::int32_t to = index[t];
+    if (to < 0) continue;
+    Tet x = tets_[t];
+    if (x.parent >= 0) x.parent = index[static_cast<std::size_t>(x.parent)];
+    if (x.first_child >= 0) x.first_child = index[static_cast<std::size_t>(x.first_child)];  // -1 when dropped
+    tets_[static_cast<std::size_t>(to)] = x;
+  }
+  tets_.resize(static_cast<std::size_t>(kept));
+  return index;
+}
+
 }  // namespace cisamr::grid

@@ -8,6 +8,7 @@
 // (lattice keys), never on the order in which tets were refined.
 #include <array>
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "core/check.hpp"
@@ -113,6 +114,9 @@ class TetForest {
   // order: 1 for a refined tet, 0 for a leaf. Two forests hold the same tets below two
   // tets of one code exactly when these agree (the codes follow from the tables).
   void append_refinement(std::int32_t t, std::vector<std::uint8_t>& out) const;
+  // Makes each of `roots` a leaf, dropping the tets below it; the others keep their order.
+  // Returns every old tet's new index, -1 for the dropped ones.
+  std::vector<std::int32_t> prune(std::span<const std::int32_t> roots);
 
  private:
   Lattice3 lattice_;

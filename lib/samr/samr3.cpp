@@ -167,14 +167,6 @@ void append_child_touches(const geometry::Oracle3& oracle, RefinedGrid3& g, std:
   }
 }
 
-// Appends tet t's cut list in `from` as the next tet's in `to`.
-void append_touches_of(const TouchLists& from, std::int32_t t, TouchLists& to) {
-  const auto list = from.touched(t);
-  to.touch_begin.push_back(static_cast<std::int32_t>(to.touch_pool.size()));
-  to.touch_pool.insert(to.touch_pool.end(), list.begin(), list.end());
-  to.touch_count.push_back(static_cast<std::uint16_t>(list.size()));
-}
-
 // Synchronous sweeps (samr3.hpp) that look only at the leaves whose rules may have changed.
 // Synchronous because R4 is not monotone: a node stops being a vertex of a cut leaf when
 // that leaf is refined into children that are uncut at the node, so refining as soon as a
@@ -474,54 +466,46 @@ std::int64_t take_cube_refinements(const geometry::Oracle3& oracle, RefinedGrid3
   }
   if (differing == 0) return 0;
 
-  // A new forest: the old one's tets but those of the replaced cubes, in the old order (a
-  // child block is made when the old array reaches it, so the box's cells come out in the
-  // order the sweeps gave them, which the parallel output's node numbering follows), with
-  // their cut lists; then the replaced cubes' trees from their bits in pre-order, copying the
-  // lists of the tets the old forest also has and filtering the parent's for the others, as
-  // the sweeps do.
-  RefinedGrid3 rebuilt{{}, grid::TetForest(g.forest.lattice(), range), std::move(g.cube_candidates), g.refinements, g.sweeps};
-  const std::int32_t roots = g.forest.root_count();
-  for (std::int32_t r = 0; r < roots; ++r) append_touches_of(g, r, rebuilt);
-  std::vector<std::int32_t> kept(g.forest.size(), -1);  // old tet → new tet, -1 in a replaced cube
-  for (std::int32_t r = 0; r < roots; ++r)
-    if (replaced[static_cast<std::size_t>(r / 5)] == nullptr) kept[static_cast<std::size_t>(r)] = r;
-  for (std::int32_t u = roots; u < static_cast<std::int32_t>(g.forest.size()); ++u) {
-    const std::int32_t parent = g.forest.tet(u).parent;
-    if (g.forest.tet(parent).first_child != u || kept[static_cast<std::size_t>(parent)] < 0) continue;
-    const std::int32_t first = rebuilt.forest.refine(kept[static_cast<std::size_t>(parent)]);
-    for (int c = 0; c < g.forest.child_count(parent); ++c) {
-      kept[static_cast<std::size_t>(u + c)] = first + c;
-      append_touches_of(g, u + c, rebuilt);
+  // The replaced cubes' trees are cut down to their roots, every other tet keeping its
+  // place in the order (the box's cells come out in the order the sweeps gave them, which
+  // the parallel output's node numbering follows) and its cut list; then they grow again
+  // from their bits in pre-order, each new tet's cut list filtered from its parent's as the
+  // sweeps filter it.
+  std::vector<std::int32_t> roots;
+  for (std::int64_t cube = 0; cube < cubes; ++cube)
+    if (replaced[static_cast<std::size_t>(cube)] != nullptr)
+      for (int local = 0; local < 5; ++local) roots.push_back(static_cast<std::int32_t>(5 * cube + local));
+  const std::vector<std::int32_t> index = g.forest.prune(roots);
+  {
+    std::int32_t at = 0;
+    for (std::size_t t = 0; t < index.size(); ++t) {
+      if (index[t] < 0) continue;
+      CISAMR_DEBUG_CHECK(index[t] == at, "SAMR: pruning reordered the forest");
+      g.touch_begin[static_cast<std::size_t>(at)] = g.touch_begin[t];
+      g.touch_count[static_cast<std::size_t>(at)] = g.touch_count[t];
+      ++at;
     }
+    g.touch_begin.resize(static_cast<std::size_t>(at));
+    g.touch_count.resize(static_cast<std::size_t>(at));
   }
-  std::vector<std::array<std::int32_t, 2>> stack;  // (old tet or -1, new tet)
-  for (std::int64_t cube = 0; cube < cubes; ++cube) {
-    const std::vector<std::uint8_t>* bits = replaced[static_cast<std::size_t>(cube)];
-    if (bits == nullptr) continue;
+  std::vector<std::int32_t> stack;
+  for (std::size_t first_root = 0; first_root < roots.size(); first_root += 5) {
+    const std::vector<std::uint8_t>& bits = *replaced[static_cast<std::size_t>(roots[first_root] / 5)];
     std::size_t next_bit = 0;
-    for (int local = 0; local < 5; ++local) {
-      const auto root = static_cast<std::int32_t>(5 * cube + local);
-      stack.push_back({root, root});
+    for (std::size_t local = 0; local < 5; ++local) {
+      stack.push_back(index[static_cast<std::size_t>(roots[first_root + local])]);
       while (!stack.empty()) {
-        const auto [old, now] = stack.back();
+        const std::int32_t now = stack.back();
         stack.pop_back();
-        CISAMR_CHECK(next_bit < bits->size(), "SAMR: a cube refinement ends early");
-        if ((*bits)[next_bit++] == 0) continue;
-        const bool old_refined = old >= 0 && !g.forest.is_leaf(old);
-        const std::int32_t first = rebuilt.forest.refine(now);
-        const int children = rebuilt.forest.child_count(now);
-        const std::int32_t old_first = old_refined ? g.forest.tet(old).first_child : -1;
-        if (old_refined)
-          for (int c = 0; c < children; ++c) append_touches_of(g, old_first + c, rebuilt);
-        else
-          append_child_touches(oracle, rebuilt, now, first, template_points(rebuilt.forest.fine_vertices(now)));
-        for (int c = children - 1; c >= 0; --c) stack.push_back({old_refined ? old_first + c : -1, first + c});
+        CISAMR_CHECK(next_bit < bits.size(), "SAMR: a cube refinement ends early");
+        if (bits[next_bit++] == 0) continue;
+        const std::int32_t first = g.forest.refine(now);
+        append_child_touches(oracle, g, now, first, template_points(g.forest.fine_vertices(now)));
+        for (int c = g.forest.child_count(now) - 1; c >= 0; --c) stack.push_back(first + c);
       }
     }
-    CISAMR_CHECK(next_bit == bits->size(), "SAMR: a cube refinement runs past its trees");
+    CISAMR_CHECK(next_bit == bits.size(), "SAMR: a cube refinement runs past its trees");
   }
-  g = std::move(rebuilt);
   return differing;
 }
 

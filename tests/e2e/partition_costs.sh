@@ -36,9 +36,13 @@ if dim == 3:
     assert summary["max_cost"] == max(costs) == load["cost_max"]
     assert math.isclose(summary["mean_cost"], sum(costs) / n, rel_tol=1e-12)
     assert math.isclose(load["cost_imbalance"], max(costs) / (sum(costs) / n), rel_tol=1e-12)
-    # In memory, the decisions near the boxes' faces were exchanged, with a narrower ghost
-    # than the partitioner's cost counts (its margins are the recomputing ones).
+    # In memory, the forest and the decisions near the boxes' faces were exchanged, with a
+    # narrower ghost than the partitioner's cost counts (its margins are the recomputing ones):
+    # the ghost cubes of the boxes with inclusions near took their owners' trees.
     assert report["near_faces"] == "exchanged" and report["exchanged_nodes"] > 0, report.get("near_faces")
+    ghost = sum(q["ghost_coarse_cells"] for q in report["partitions"])
+    assert 0 < report["exchanged_cubes"] <= ghost, (report["exchanged_cubes"], ghost)
+    assert 0 <= report["replaced_cubes"] <= ghost, report["replaced_cubes"]
     assert report["timings_s"]["exchange"]["max"] >= 0, report["timings_s"]
 else:
     assert "cost" not in parts["parts"][0] and "max_cost" not in summary, summary

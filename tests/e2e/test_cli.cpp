@@ -360,7 +360,7 @@ TEST_F(Cli, PartitionGivesTheBoxesTheMesherMeshes) {
   EXPECT_GT(meshed["load"]["cost_max"].get<double>(), meshed["load"]["max"].get<double>());  // the ghost counts
 }
 
-// An in-memory 3D run exchanges the decisions near its boxes' faces, a streamed one, a
+// An in-memory 3D run exchanges the forest and the decisions near its boxes' faces, a streamed one, a
 // --no-ghost-exchange one and one whose partitions' working state might not fit recompute
 // them in a wider ghost: the same mesh, and the report says which (with the exchange's nodes
 // and time).
@@ -381,10 +381,15 @@ TEST_F(Cli, ReportSaysWhetherTheDecisionsNearFacesWereExchanged) {
              tight = report_of("tight", " --max-elements 2.5e5");
   EXPECT_EQ(exchanged["near_faces"], "exchanged");
   EXPECT_GT(exchanged["exchanged_nodes"].get<std::int64_t>(), 0);
+  EXPECT_GT(exchanged["exchanged_cubes"].get<std::int64_t>(), 0);
+  EXPECT_GE(exchanged["replaced_cubes"].get<std::int64_t>(), 0);
+  EXPECT_LE(exchanged["replaced_cubes"].get<std::int64_t>(), exchanged["exchanged_cubes"].get<std::int64_t>());
   EXPECT_TRUE(exchanged["timings_s"].contains("exchange"));
   for (const auto* j : {&streamed, &recomputed, &tight}) {
     EXPECT_EQ((*j)["near_faces"], "recomputed");
     EXPECT_EQ((*j)["exchanged_nodes"], 0);
+    EXPECT_EQ((*j)["exchanged_cubes"], 0);
+    EXPECT_EQ((*j)["replaced_cubes"], 0);
     EXPECT_EQ((*j)["checksum"], exchanged["checksum"]);
   }
   // The narrower ghost: fewer coarse cells meshed beyond the boxes.
