@@ -206,7 +206,8 @@ GhostRegion<Dim> grow(const InclusionIndex<Dim>& index, const grid::Lattice<Dim>
 
 int ghost_margin3(int level, int max_level, bool exchanged) {
   const double samr_reach = samr::reach_coarse_cells3(max_level);
-  if (exchanged) return static_cast<int>(std::ceil(std::max(samr_reach, std::ldexp(kExchangedKernelReach3, -std::max(0, level)))));
+  if (exchanged)
+    return static_cast<int>(std::ceil(std::max(samr_reach, std::ldexp(kExchangedKernelReach3, -std::max(0, level)))));
   return static_cast<int>(std::floor(samr_reach + std::ldexp(kKernelReach3, -std::max(0, level)))) + 1;
 }
 

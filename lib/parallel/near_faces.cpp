@@ -125,7 +125,8 @@ struct Decision {
 
 }  // namespace
 
-std::vector<std::vector<samr::CubeRefinement>> exchange_forests(const Comm& comm, const std::vector<grid::CellRange<3>>& boxes,
+std::vector<std::vector<samr::CubeRefinement>> exchange_forests(const Comm& comm,
+                                                                const std::vector<grid::CellRange<3>>& boxes,
                                                                 std::span<SnappedPartition> mine, std::int64_t& cubes) {
   const int ranks = comm.size();
   const int partitions = static_cast<int>(boxes.size());
@@ -185,9 +186,11 @@ std::vector<std::vector<samr::CubeRefinement>> exchange_forests(const Comm& comm
         CISAMR_CHECK(j < mine.size() && mine[j].id == owner, "exchange near faces: a question for another rank's partition");
         const samr::RefinedGrid3& grid = *mine[j].snapped->grid;
         const std::int64_t at = grid.cube_index(cube[0], cube[1], cube[2]);
-        CISAMR_CHECK(at >= 0 && holds(boxes[static_cast<std::size_t>(owner)], cube), "exchange near faces: a cube outside its owner's box");
+        CISAMR_CHECK(at >= 0 && holds(boxes[static_cast<std::size_t>(owner)], cube),
+                     "exchange near faces: a cube outside its owner's box");
         bits.clear();
-        for (int local = 0; local < 5; ++local) grid.forest.append_refinement(static_cast<std::int32_t>(5 * at + local), bits);
+        for (int local = 0; local < 5; ++local)
+          grid.forest.append_refinement(static_cast<std::int32_t>(5 * at + local), bits);
         answer.put_vector(bits);
       }
       answers[static_cast<std::size_t>(r)] = answer.take();

@@ -27,7 +27,8 @@ struct SnappedPartition {
 // partition whose box holds the cube (which refined it as the whole run does). Returns per
 // partition of `mine` what it took (samr::take_cube_refinements applies it); `cubes` counts
 // them.
-std::vector<std::vector<samr::CubeRefinement>> exchange_forests(const Comm& comm, const std::vector<grid::CellRange<3>>& boxes,
+std::vector<std::vector<samr::CubeRefinement>> exchange_forests(const Comm& comm,
+                                                                const std::vector<grid::CellRange<3>>& boxes,
                                                                 std::span<SnappedPartition> mine, std::int64_t& cubes);
 
 // Collective, between pipeline::snap3_first and snap3_second: the guard's first-pass

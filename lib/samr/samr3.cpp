@@ -127,9 +127,10 @@ std::array<LatticePoint3, 11> template_points(const std::array<LatticePoint3, 4>
 }
 
 // Appends the cut lists of the children of t, just refined (the first at `first`; `points`:
-// t's template_points): the parent's inclusions that touch the child's box. Several children share a box (a corner
-// tet's 7 children have 4 boxes, a regular tet's 12 have 8), and boundary_touches depends
-// only on the inclusion and the box.
+// t's template_points): the parent's inclusions that touch the child's box. Several
+// children share a box (a corner tet's 7 children have 4 boxes, a regular tet's 12 have 8),
+// and boundary_touches depends only on the inclusion and the box. The sweeps and
+// take_cube_refinements both make the lists this way.
 void append_child_touches(const geometry::Oracle3& oracle, RefinedGrid3& g, std::int32_t t, std::int32_t first,
                           const std::array<LatticePoint3, 11>& points) {
   CISAMR_CHECK(g.touch_begin.size() == static_cast<std::size_t>(first), "SAMR: cut lists out of step with the forest");
