@@ -29,6 +29,37 @@ struct ClosedBox {
   }
 };
 
+// The round trip of one exchange: ask[r] holds the questions for rank r; each rank answers
+// what it received, one question at a time (`answer(owner, u, out)`: the partition asked and
+// the question's remaining fields from u, its answer into out), after checking that the
+// partition asked is its own. Returns, per rank, the answers to this rank's questions in
+// their order. Each local step agrees on its errors (a check failing on one rank must not
+// leave the others waiting in the next alltoallv).
+template <class AnswerOne>
+std::vector<Bytes> ask_and_answer(const Comm& comm, std::vector<Packer>& ask, std::span<SnappedPartition> mine,
+                                  AnswerOne&& answer) {
+  const int ranks = comm.size();
+  std::vector<Bytes> questions(static_cast<std::size_t>(ranks));
+  for (int r = 0; r < ranks; ++r) questions[static_cast<std::size_t>(r)] = ask[static_cast<std::size_t>(r)].take();
+  const std::vector<Bytes> received = comm.alltoallv(questions);
+  const int first = mine.empty() ? 0 : mine.front().id;
+  std::vector<Bytes> answers(static_cast<std::size_t>(ranks));
+  run_collectively(comm, [&] {
+    for (int r = 0; r < ranks; ++r) {
+      Unpacker u(received[static_cast<std::size_t>(r)]);
+      Packer out;
+      while (!u.done()) {
+        const auto owner = u.get<std::int32_t>();
+        const auto j = static_cast<std::size_t>(owner - first);
+        CISAMR_CHECK(j < mine.size() && mine[j].id == owner, "exchange near faces: a question for another rank's partition");
+        answer(j, u, out);
+      }
+      answers[static_cast<std::size_t>(r)] = out.take();
+    }
+  });
+  return comm.alltoallv(answers);
+}
+
 // One round of questions and answers. `nodes_of(i)`: partition i's node table; `wanted(i, n)`:
 // whether its node n (outside its closed box) is asked for; `answer(j, m)`: what partition j
 // (the owner) says of its node m; `take(i, n, answer)`: partition i takes it. Returns the
@@ -73,29 +104,11 @@ std::int64_t ask_owners(const Comm& comm, const grid::Lattice<3>& lattice, const
       }
     }
   });
-  std::vector<Bytes> questions(static_cast<std::size_t>(ranks));
-  for (int r = 0; r < ranks; ++r) questions[static_cast<std::size_t>(r)] = ask[static_cast<std::size_t>(r)].take();
-  const std::vector<Bytes> received = comm.alltoallv(questions);
-
-  const int first = mine.empty() ? 0 : mine.front().id;
-  std::vector<Bytes> answers(static_cast<std::size_t>(ranks));
-  run_collectively(comm, [&] {
-    for (int r = 0; r < ranks; ++r) {
-      Unpacker u(received[static_cast<std::size_t>(r)]);
-      Packer answer;
-      while (!u.done()) {
-        const auto owner = u.get<std::int32_t>();
-        const auto key = u.get<grid::LatticeKey3>();
-        const auto j = static_cast<std::size_t>(owner - first);
-        CISAMR_CHECK(j < mine.size() && mine[j].id == owner, "exchange near faces: a question for another rank's partition");
-        const std::int32_t m = nodes_of(j).id(key);
-        CISAMR_CHECK(m >= 0, "exchange near faces: the owner lacks a node of its closed box");
-        answer.put(answer_of(j, m));
-      }
-      answers[static_cast<std::size_t>(r)] = answer.take();
-    }
+  const std::vector<Bytes> replies = ask_and_answer(comm, ask, mine, [&](std::size_t j, Unpacker& u, Packer& out) {
+    const std::int32_t m = nodes_of(j).id(u.get<grid::LatticeKey3>());
+    CISAMR_CHECK(m >= 0, "exchange near faces: the owner lacks a node of its closed box");
+    out.put(answer_of(j, m));
   });
-  const std::vector<Bytes> replies = comm.alltoallv(answers);
 
   std::int64_t taken = 0;
   run_collectively(comm, [&] {
@@ -168,35 +181,17 @@ std::vector<std::vector<samr::CubeRefinement>> exchange_forests(const Comm& comm
           }
     }
   });
-  std::vector<Bytes> questions(static_cast<std::size_t>(ranks));
-  for (int r = 0; r < ranks; ++r) questions[static_cast<std::size_t>(r)] = ask[static_cast<std::size_t>(r)].take();
-  const std::vector<Bytes> received = comm.alltoallv(questions);
-
-  const int first = mine.empty() ? 0 : mine.front().id;
-  std::vector<Bytes> answers(static_cast<std::size_t>(ranks));
-  run_collectively(comm, [&] {
-    std::vector<std::uint8_t> bits;
-    for (int r = 0; r < ranks; ++r) {
-      Unpacker u(received[static_cast<std::size_t>(r)]);
-      Packer answer;
-      while (!u.done()) {
-        const auto owner = u.get<std::int32_t>();
-        const auto cube = u.get<std::array<std::int64_t, 3>>();
-        const auto j = static_cast<std::size_t>(owner - first);
-        CISAMR_CHECK(j < mine.size() && mine[j].id == owner, "exchange near faces: a question for another rank's partition");
-        const samr::RefinedGrid3& grid = *mine[j].snapped->grid;
-        const std::int64_t at = grid.cube_index(cube[0], cube[1], cube[2]);
-        CISAMR_CHECK(at >= 0 && holds(boxes[static_cast<std::size_t>(owner)], cube),
-                     "exchange near faces: a cube outside its owner's box");
-        bits.clear();
-        for (int local = 0; local < 5; ++local)
-          grid.forest.append_refinement(static_cast<std::int32_t>(5 * at + local), bits);
-        answer.put_vector(bits);
-      }
-      answers[static_cast<std::size_t>(r)] = answer.take();
-    }
+  std::vector<std::uint8_t> bits;
+  const std::vector<Bytes> replies = ask_and_answer(comm, ask, mine, [&](std::size_t j, Unpacker& u, Packer& out) {
+    const auto cube = u.get<std::array<std::int64_t, 3>>();
+    const samr::RefinedGrid3& grid = *mine[j].snapped->grid;
+    const std::int64_t at = grid.cube_index(cube[0], cube[1], cube[2]);
+    CISAMR_CHECK(at >= 0 && holds(boxes[static_cast<std::size_t>(mine[j].id)], cube),
+                 "exchange near faces: a cube outside its owner's box");
+    bits.clear();
+    for (int local = 0; local < 5; ++local) grid.forest.append_refinement(static_cast<std::int32_t>(5 * at + local), bits);
+    out.put_vector(bits);
   });
-  const std::vector<Bytes> replies = comm.alltoallv(answers);
 
   std::vector<std::vector<samr::CubeRefinement>> taken(mine.size());
   cubes = 0;
