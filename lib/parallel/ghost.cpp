@@ -214,9 +214,9 @@ int ghost_margin3(int level, int max_level, bool exchanged) {
 partition::PartitionOptions ghost_aware(partition::PartitionOptions options, int dimension, const GhostRule& rule) {
   if (dimension != 3) return options;
   options.ghost_cells_at_level.clear();
-  for (int level = 0; level <= 3; ++level)  // ghost_margin3 is 2 from level 3 on
+  for (int level = 0; level <= 3; ++level)  // ghost_margin3 is 1 from level 1 on
     options.ghost_cells_at_level.push_back(rule.margin3_cubes > 0 ? static_cast<int>(std::ceil(rule.margin3_cubes))
-                                                                   : ghost_margin3(level));
+                                                                   : ghost_margin3(level, 64, true));
   options.ghost_weight = kGhostCostWeight3;
   return options;
 }

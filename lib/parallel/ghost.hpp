@@ -148,18 +148,23 @@ inline bool exchanges_near_faces(const GhostRule& rule, bool periodic) {
          rule.swap_window_cells3 == 0 && rule.max_closure_rounds == 0;
 }
 
-// What a cube of 3D ghost costs the partitioner, as a fraction of a box cube's work: SAMR
-// refines the whole margin, r-adaptivity works on its inner cells only (kRadaptWindow3),
-// subdivision, quality and output not at all, and the outer cubes hold less of what is costly.
-// Chosen by measurement (validation/bench/SCALING.md, "A ghost-aware balance"): of 0.35, 0.5,
-// 0.65 and 0.8, 0.35 gave the lowest slowest partition on spheres300 at 16 and 64 partitions
-// and on E4 at 16.
-inline constexpr double kGhostCostWeight3 = 0.35;
+// What a cube of 3D ghost costs the partitioner, as a fraction of a box cube's work, with the
+// ghost of an in-memory run (the forest and the decisions near faces exchanged:
+// ghost_margin3(l, Lmax, true), 1 or 2 cubes): SAMR refines it, r-adaptivity works on its
+// first cell only, subdivision, quality and output not at all. Chosen by measurement
+// (validation/bench/SCALING.md, "The forest exchanged near faces too"): 0.15 gave a lower
+// slowest partition than 0.35 at 16 partitions of spheres300 and E4 and as low at 64. (0.35
+// with the recomputing margins, 7, 4, 3, 2, before: they left the boxes inside the domain
+// under-loaded once the ghost was exchanged.) Streamed and --no-ghost-exchange runs, whose
+// ghost is wider, take the same boxes: one set of boxes per scene and count, so that their
+// outputs are the in-memory run's node for node.
+inline constexpr double kGhostCostWeight3 = 0.15;
 
 // `options` with the 3D ghost for the partitioner to balance (partition::PartitionOptions::
-// ghost_cells_at_level, ghost_weight): ghost_margin3 by level, or the forced margin; 2D
-// partitions balance their loads only (their ghost is 2 cells: 1.15 times the domain at 64).
-// Both `cisamr mesh` and `cisamr partition` partition with it, so they give the same boxes.
+// ghost_cells_at_level, ghost_weight): the exchanged ghost_margin3 by level, or the forced
+// margin; 2D partitions balance their loads only (their ghost is 2 cells: 1.15 times the
+// domain at 64). Both `cisamr mesh` and `cisamr partition` partition with it, so they give
+// the same boxes.
 partition::PartitionOptions ghost_aware(partition::PartitionOptions options, int dimension, const GhostRule& rule = {});
 
 // The full scene's lattice (every inclusion's levels count for Lmax), built from the
