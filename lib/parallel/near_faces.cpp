@@ -29,10 +29,10 @@ struct ClosedBox {
   }
 };
 
-// The round trip of one exchange: ask[r] holds the questions for rank r; each rank answers
-// what it received, one question at a time (`answer(owner, u, out)`: the partition asked and
-// the question's remaining fields from u, its answer into out), after checking that the
-// partition asked is its own. Returns, per rank, the answers to this rank's questions in
+// The round trip of one exchange: ask[r] holds the questions for rank r, each led by the id
+// of the partition asked; each rank answers what it received, one question at a time, after
+// checking that the partition asked is its own (`answer(j, u, out)`: j its position in
+// `mine`, the question's remaining fields read from u, the answer written to out). Returns, per rank, the answers to this rank's questions in
 // their order. Each local step agrees on its errors (a check failing on one rank must not
 // leave the others waiting in the next alltoallv).
 template <class AnswerOne>
