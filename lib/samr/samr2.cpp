@@ -101,23 +101,9 @@ class Refiner {
       throw MeshingError("SAMR rules ask for a level beyond the finest one");
     const std::int32_t first = g_.forest.refine(c);
     ++g_.refinements;
-    const auto parent_touch = g_.touched(c);
-    std::int32_t parent_touch_begin = g_.touch_begin[static_cast<std::size_t>(c)];
-    const std::uint16_t parent_touch_count = g_.touch_count[static_cast<std::size_t>(c)];
-    (void)parent_touch;
     for (int k = 0; k < 4; ++k) {
       const std::int32_t child = first + k;
-      const Box2 box = g_.forest.box(child);
-      g_.touch_begin.push_back(static_cast<std::int32_t>(g_.touch_pool.size()));
-      std::uint16_t count = 0;
-      for (std::uint16_t t = 0; t < parent_touch_count; ++t) {
-        const std::int32_t inc = g_.touch_pool[static_cast<std::size_t>(parent_touch_begin + t)];
-        if (oracle_.boundary_touches(inc, box)) {
-          g_.touch_pool.push_back(inc);
-          ++count;
-        }
-      }
-      g_.touch_count.push_back(count);
+      g_.append_touching(oracle_, c, g_.forest.box(child));
       stack_.push_back(child);
     }
     // Cut cells near c may now see a finer neighbour (R4): visit them again.

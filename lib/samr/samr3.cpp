@@ -136,8 +136,6 @@ void append_child_touches(const geometry::Oracle3& oracle, RefinedGrid3& g, std:
   CISAMR_CHECK(g.touch_begin.size() == static_cast<std::size_t>(first), "SAMR: cut lists out of step with the forest");
   const bool corner = g.forest.kind(t) == tet::Kind::corner;
   const int children = g.forest.child_count(t);
-  const std::int32_t begin = g.touch_begin[static_cast<std::size_t>(t)];
-  const std::uint16_t count = g.touch_count[static_cast<std::size_t>(t)];
   std::array<std::pair<LatticePoint3, LatticePoint3>, 12> bounds{};
   for (int c = 0; c < children; ++c) {
     const auto& child_points = corner ? tet::kCornerChildren[c] : tet::kRegularChildren[c];
@@ -148,23 +146,15 @@ void append_child_touches(const geometry::Oracle3& oracle, RefinedGrid3& g, std:
     bounds[c] = {lo, hi};
     int same = 0;
     while (same < c && bounds[same] != bounds[c]) ++same;
-    g.touch_begin.push_back(static_cast<std::int32_t>(g.touch_pool.size()));
-    std::uint16_t n = 0;
     if (same < c) {  // a sibling with the same box: same list
       const std::int32_t from = g.touch_begin[static_cast<std::size_t>(first + same)];
-      n = g.touch_count[static_cast<std::size_t>(first + same)];
+      const std::uint16_t n = g.touch_count[static_cast<std::size_t>(first + same)];
+      g.touch_begin.push_back(static_cast<std::int32_t>(g.touch_pool.size()));
       for (std::uint16_t i = 0; i < n; ++i) g.touch_pool.push_back(g.touch_pool[static_cast<std::size_t>(from + i)]);
-    } else if (count > 0) {
-      const Box3 box{g.forest.position(lo), g.forest.position(hi)};
-      for (std::uint16_t i = 0; i < count; ++i) {
-        const std::int32_t k = g.touch_pool[static_cast<std::size_t>(begin + i)];
-        if (oracle.boundary_touches(k, box)) {
-          g.touch_pool.push_back(k);
-          ++n;
-        }
-      }
+      g.touch_count.push_back(n);
+    } else {
+      g.append_touching(oracle, t, Box3{g.forest.position(lo), g.forest.position(hi)});
     }
-    g.touch_count.push_back(n);
   }
 }
 

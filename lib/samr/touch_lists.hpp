@@ -25,6 +25,25 @@ struct TouchLists {
     std::vector<std::int32_t>().swap(touch_begin);
     std::vector<std::int32_t>().swap(touch_pool);
   }
+  // Appends the next cell's list: those of cell `parent`'s inclusions whose boundary touches
+  // `box` (the cell's closed bounding box; oracle.boundary_touches(k, box)). Returns its
+  // length. Both dimensions' refinements make their children's lists this way.
+  template <class Oracle, class Box>
+  std::uint16_t append_touching(const Oracle& oracle, std::int32_t parent, const Box& box) {
+    const std::int32_t begin = touch_begin[static_cast<std::size_t>(parent)];
+    const std::uint16_t count = touch_count[static_cast<std::size_t>(parent)];
+    touch_begin.push_back(static_cast<std::int32_t>(touch_pool.size()));
+    std::uint16_t n = 0;
+    for (std::uint16_t i = 0; i < count; ++i) {
+      const std::int32_t k = touch_pool[static_cast<std::size_t>(begin + i)];
+      if (oracle.boundary_touches(k, box)) {
+        touch_pool.push_back(k);
+        ++n;
+      }
+    }
+    touch_count.push_back(n);
+    return n;
+  }
 };
 
 // Per coarse cell of the range (2D: the forest's roots; 3D: the cubes, x fastest): the

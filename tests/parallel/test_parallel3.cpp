@@ -555,16 +555,23 @@ KernelReachCounts compare_kernel_reach(const std::vector<testing::Case3>& cases,
   return counts;
 }
 
-TEST(KernelReach3, TheBoxReadsNothingBeyondFiveCellsOfItsLevel) {
+// The scenes of the reach tests: the invariance scenes but the periodic one (its windows are
+// the whole ghost, and it exchanges nothing), packed level-1 and level-2 scenes without extra
+// levels, and level-0 spheres beside level-2 ones.
+std::vector<testing::Case3> reach_cases() {
   pipeline::Options no_extra;
   no_extra.extra_levels = 0;
   std::vector<testing::Case3> cases = testing::invariance_cases3();
-  std::erase_if(cases, [](const testing::Case3& c) { return c.name == "periodic-level0"; });  // windows: whole ghost
+  std::erase_if(cases, [](const testing::Case3& c) { return c.name == "periodic-level0"; });
   cases.push_back({"packed-level1-no-extra", testing::packed_scene3(12, 1, 16, 16, 12, 80), no_extra});
   cases.push_back({"packed-level2-no-extra", testing::packed_scene3(13, 2, 10, 10, 8, 30), no_extra});
   cases.push_back({"levels-0-and-2", testing::mixed_level_scene3(), {}});
+  return cases;
+}
+
+TEST(KernelReach3, TheBoxReadsNothingBeyondFiveCellsOfItsLevel) {
   const std::array<int, 5> boxes{0, 4, 8, 13, 16};
-  const KernelReachCounts counts = compare_kernel_reach(cases, boxes);
+  const KernelReachCounts counts = compare_kernel_reach(reach_cases(), boxes);
   EXPECT_EQ(counts.compared, 8 * 5);
   EXPECT_GT(counts.half_differs, 0);  // the comparison can fail
 }
@@ -706,15 +713,8 @@ ExchangedWindowCounts compare_exchanged_windows(const std::vector<testing::Case3
 }
 
 TEST(KernelReach3, ExchangedWindowsDecideTheClosedBoxsNodes) {
-  pipeline::Options no_extra;
-  no_extra.extra_levels = 0;
-  std::vector<testing::Case3> cases = testing::invariance_cases3();
-  std::erase_if(cases, [](const testing::Case3& c) { return c.name == "periodic-level0"; });  // no exchange there
-  cases.push_back({"packed-level1-no-extra", testing::packed_scene3(12, 1, 16, 16, 12, 80), no_extra});
-  cases.push_back({"packed-level2-no-extra", testing::packed_scene3(13, 2, 10, 10, 8, 30), no_extra});
-  cases.push_back({"levels-0-and-2", testing::mixed_level_scene3(), {}});
   const std::array<int, 5> boxes{0, 4, 8, 13, 16};
-  const ExchangedWindowCounts counts = compare_exchanged_windows(cases, boxes);
+  const ExchangedWindowCounts counts = compare_exchanged_windows(reach_cases(), boxes);
   EXPECT_EQ(counts.compared, 8 * 5);
   EXPECT_GT(counts.nodes_compared, 100000);
   EXPECT_GT(counts.box_only_differs, 0);  // the comparison can fail
