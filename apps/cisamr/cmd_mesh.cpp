@@ -224,8 +224,8 @@ void add_mesh_command(CLI::App& app, GlobalFlags& flags, int& exit_code) {
       ->check(named("--ghost-cubes", number_in(0, 1e6)))
       ->group("");
   cmd->add_flag("--no-ghost-exchange{false}", args->options.exchange_near_faces,
-                "Comparison (3D, in memory): every partition recomputes the decisions near its box's faces in a "
-                "wider ghost instead of taking them from their owners after r-adaptivity (as a streamed run does)")
+                "Comparison (3D, in memory): every partition recomputes the forest and the decisions near its box's "
+                "faces in a wider ghost instead of taking them from their owners (as a streamed run does)")
       ->group("");
   cmd->add_option("--ghost-windows", ghost.radapt_window_cells3,
                   "Comparison (3D): r-adaptivity's window around a partition box, in cells of the deciding level "

@@ -65,9 +65,9 @@ inline constexpr int kStreamedPartitionsPerRank = 8;
 inline constexpr double kBytesPerElement = 130;
 
 // How much more a 3D in-memory run with several partitions per rank may hold when it
-// exchanges the decisions near faces (every partition's forest and nodes held between the
-// kernel's parts): 64 partitions of spheres300 on one rank peak at 481 MB, one partition at
-// 279 MB. Where the mesh's estimate times this would not fit, the partitions recompute those
+// exchanges the forest and the decisions near faces (every partition's forest and nodes held
+// between the kernel's parts): 64 partitions of spheres300 on one rank peak at 419 MB, one
+// partition at 282 MB. Where the mesh's estimate times this would not fit, the partitions recompute those
 // decisions one at a time instead (parallel::MeshOptions::exchange_near_faces).
 inline constexpr double kExchangeMemoryFactor = 2.0;
 

@@ -134,7 +134,7 @@ struct GhostRule {
   // a few coarse cells of it (README.md, "Ghost region"). -1: the full closure, for
   // comparison.
   int max_closure_rounds = 0;
-  // 3D: the caller exchanges the decisions near faces after r-adaptivity (README.md,
+  // 3D: the caller exchanges the forest and r-adaptivity's decisions near faces (README.md,
   // "Decisions exchanged near faces"), so the margins and windows are the narrower
   // kExchanged* ones. In effect only where exchanges_near_faces() says so: not with a forced
   // margin, windows or closure rounds (comparisons keep their meaning), not on a periodic
@@ -219,9 +219,10 @@ struct GhostRegion {
   // 3D: r-adaptivity's, its guard's passes' and face swapping's windows, fine lattice units
   // (-1: every leaf).
   std::int64_t radapt_reach = -1, swap_reach = -1, first_pass_reach = -1, second_pass_reach = -1;
-  // 3D: the margins and windows count on the decisions near faces being exchanged
-  // (exchanges_near_faces); the kernel must then be run as pipeline::snap3, the exchange,
-  // pipeline::finish3.
+  // 3D: the margins and windows count on the forest and the decisions near faces being
+  // exchanged (exchanges_near_faces); the kernel must then run in parts with the exchanges
+  // between them: pipeline::refine3_part, exchange_forests (and take_cube_refinements),
+  // snap3_first, exchange_first_pass_refusals, snap3_second, exchange_decisions, finish3.
   bool exchange = false;
   std::vector<std::int32_t> inclusions;  // scene indices, ascending
 };
