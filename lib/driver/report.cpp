@@ -110,6 +110,9 @@ std::string report(const MeshRun<Dim>& run, const std::string& scene_path, const
       part["ghost_coarse_cells"] = p.ghost_cells;
       part["inclusions_loaded"] = p.inclusions;
       part["kernel_s"] = p.kernel_seconds;
+      // The kernel's parts between exchanges (parallel::kKernelStages), where ranks wait.
+      if (m.near_faces_exchanged)
+        part["kernel_stages_s"] = std::vector<double>(p.stage_seconds.begin(), p.stage_seconds.end());
     }
     parts.push_back(part);
   }

@@ -371,7 +371,9 @@ DistributedMesh<Dim> mesh_partitions(const Comm& comm, geometry::SceneDesc scene
   begin_phase(progress, "kernel");
   std::vector<std::unique_ptr<Oracle>> oracles(static_cast<std::size_t>(count));
   std::vector<std::vector<int>> region_levels(static_cast<std::size_t>(count));
-  std::vector<double> kernel_seconds(static_cast<std::size_t>(count), 0.0);
+  // Kernel time per partition by its parts between exchanges (one part when nothing is
+  // exchanged): on a rank per partition each part waits for the slowest partition's.
+  std::vector<std::array<double, kKernelStages>> stage_seconds(static_cast<std::size_t>(count));
   const auto prepare = [&](int p) {
     const GhostRegion<Dim>& region = regions[static_cast<std::size_t>(p - first)];
     ScopedPhase timer(&out.times, "oracle");
@@ -393,7 +395,8 @@ DistributedMesh<Dim> mesh_partitions(const Comm& comm, geometry::SceneDesc scene
     PartitionSummary s;
     s.id = p;
     s.rank = rank;
-    s.kernel_seconds = kernel_seconds[static_cast<std::size_t>(p - first)];
+    s.stage_seconds = stage_seconds[static_cast<std::size_t>(p - first)];
+    for (double sec : s.stage_seconds) s.kernel_seconds += sec;
     for (int d = 0; d < Dim; ++d) s.lattice_min[d] = region.box.lo[d], s.lattice_max[d] = region.box.hi[d];
     s.load = boxes[static_cast<std::size_t>(p)].load;
     s.cost = boxes[static_cast<std::size_t>(p)].cost;
@@ -424,7 +427,7 @@ DistributedMesh<Dim> mesh_partitions(const Comm& comm, geometry::SceneDesc scene
           snapped.push_back(pipeline::refine3_part(*oracles[static_cast<std::size_t>(p - first)], lattice, region.box,
                                                    kernel_ghost(region), kernel_options,
                                                    region_levels[static_cast<std::size_t>(p - first)]));
-          kernel_seconds[static_cast<std::size_t>(p - first)] = seconds_since(t0);
+          stage_seconds[static_cast<std::size_t>(p - first)][0] = seconds_since(t0);
         }
       });
       std::vector<grid::CellRange<3>> all_boxes(boxes.size());
@@ -454,7 +457,7 @@ DistributedMesh<Dim> mesh_partitions(const Comm& comm, geometry::SceneDesc scene
           }
           std::vector<samr::CubeRefinement>().swap(owners_cubes[i]);
           pipeline::snap3_first(*oracles[i], lattice, region.box, kernel_ghost(region), kernel_options, snapped[i]);
-          kernel_seconds[i] += seconds_since(t0);
+          stage_seconds[i][1] = seconds_since(t0);
         }
       });
       out.replaced_cubes = comm.allreduce_sum(replaced);
@@ -466,7 +469,7 @@ DistributedMesh<Dim> mesh_partitions(const Comm& comm, geometry::SceneDesc scene
         for (int p = first; p < last; ++p) {
           const auto t0 = std::chrono::steady_clock::now();
           pipeline::snap3_second(snapped[static_cast<std::size_t>(p - first)], kernel_options);
-          kernel_seconds[static_cast<std::size_t>(p - first)] += seconds_since(t0);
+          stage_seconds[static_cast<std::size_t>(p - first)][2] = seconds_since(t0);
         }
       });
       {
@@ -482,7 +485,7 @@ DistributedMesh<Dim> mesh_partitions(const Comm& comm, geometry::SceneDesc scene
           pipeline::Result<3> result =
               pipeline::finish3(*oracles[static_cast<std::size_t>(p - first)], lattice, region.box, kernel_ghost(region),
                                 kernel_options, p, std::move(snapped[static_cast<std::size_t>(p - first)]));
-          kernel_seconds[static_cast<std::size_t>(p - first)] += seconds_since(t0);
+          stage_seconds[static_cast<std::size_t>(p - first)][3] = seconds_since(t0);
           deliver(p, std::move(result));
         }
         if (partition_progress) partition_progress->finish();
@@ -499,7 +502,7 @@ DistributedMesh<Dim> mesh_partitions(const Comm& comm, geometry::SceneDesc scene
         pipeline::Result<Dim> result = pipeline::run(*oracles[static_cast<std::size_t>(p - first)], lattice, region.box,
                                                      kernel_ghost(region), kernel_options, p,
                                                      region_levels[static_cast<std::size_t>(p - first)]);
-        kernel_seconds[static_cast<std::size_t>(p - first)] = seconds_since(t0);
+        stage_seconds[static_cast<std::size_t>(p - first)][0] = seconds_since(t0);
         deliver(p, std::move(result));
       }
       if (partition_progress) partition_progress->finish();

@@ -44,6 +44,11 @@ struct MeshOptions {
   bool exchange_near_faces = true;
 };
 
+// The kernel's parts a 3D run with exchanges near faces times apart (SAMR; the forest's
+// exchange taken and the guard's first pass; its second pass; face swapping to the
+// partition's mesh): every rank waits at each exchange for the slowest.
+inline constexpr int kKernelStages = 4;
+
 struct PartitionSummary {
   int id = 0, rank = 0;
   std::array<std::int64_t, 3> lattice_min{}, lattice_max{};  // coarse cells [min, max) (Dim used)
@@ -53,7 +58,8 @@ struct PartitionSummary {
   std::int64_t ghost_cells = 0;   // coarse cells meshed beyond its box
   std::int64_t inclusions = 0;    // inclusions its ghost region loads
   std::int64_t elements = 0, nodes = 0;
-  double kernel_seconds = 0;      // pipeline::run
+  double kernel_seconds = 0;      // pipeline::run (the sum of stage_seconds)
+  std::array<double, kKernelStages> stage_seconds{};  // by kKernelStages' parts; [0] only when nothing was exchanged
 };
 
 // The largest and the mean of one figure of the partitions (load, cost), and their ratio.

@@ -385,7 +385,20 @@ TEST_F(Cli, ReportSaysWhetherTheDecisionsNearFacesWereExchanged) {
   EXPECT_GE(exchanged["replaced_cubes"].get<std::int64_t>(), 0);
   EXPECT_LE(exchanged["replaced_cubes"].get<std::int64_t>(), exchanged["exchanged_cubes"].get<std::int64_t>());
   EXPECT_TRUE(exchanged["timings_s"].contains("exchange"));
+  // Each partition's kernel time by its four parts between exchanges: all run, and they add up.
+  for (const auto& p : exchanged["partitions"]) {
+    ASSERT_TRUE(p.contains("kernel_stages_s")) << p.dump();
+    const auto stages = p["kernel_stages_s"].get<std::vector<double>>();
+    ASSERT_EQ(stages.size(), 4u);
+    double sum = 0;
+    for (double s : stages) {
+      EXPECT_GT(s, 0) << p.dump();
+      sum += s;
+    }
+    EXPECT_NEAR(sum, p["kernel_s"].get<double>(), 1e-9) << p.dump();
+  }
   for (const auto* j : {&streamed, &recomputed, &tight}) {
+    for (const auto& p : (*j)["partitions"]) EXPECT_FALSE(p.contains("kernel_stages_s")) << p.dump();
     EXPECT_EQ((*j)["near_faces"], "recomputed");
     EXPECT_EQ((*j)["exchanged_nodes"], 0);
     EXPECT_EQ((*j)["exchanged_cubes"], 0);

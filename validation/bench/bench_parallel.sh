@@ -6,7 +6,9 @@
 #   validation/bench/bench_parallel.sh BUILD/bin/cisamr [2d|3d|e4|all]
 # Environment: OUT (default /tmp/cisamr_bench_parallel), REPS (runs per configuration, the
 # median is kept; default 3), PARTS1 / PARTS2 (partition counts on 1 / 2 ranks), RANKS
-# (more rank counts, one partition per rank; for machines with more cores).
+# (more rank counts, one partition per rank; for machines with more cores; each also runs
+# that many sequential runs at once, to tell what the machine loses with its cores busy
+# from what the mesher loses).
 # Run it on an idle machine: timings taken while something else compiles are worthless.
 set -eu
 cisamr=$(realpath "$1")
@@ -75,20 +77,61 @@ run() {
     else
       $mpi -n "$ranks" "$cisamr" mesh "$scene" -o "$name.pvtu" --report "$name.$r.json" -q "$@"
     fi
+    # The output on disk before the next run: written back during it (E4: 1 GB, 30 s on),
+    # it slowed that run's partitions by up to 60 %.
+    sync
   done
   rm -f "$name".vtu "$name".pvtu "$name"_*.vtu
 }
 
+# P sequential runs at once, REPS times: NAME P SCENE [options...]. A machine whose cores
+# share caches, memory bandwidth or a turbo budget runs each slower than one alone: the
+# median over the copies against the sequential run's is that loss, which no mesher avoids
+# (a lent 16-core machine at 876a47f lost about a quarter from 4 busy cores on; SCALING.md).
+run_copies() {
+  local name=$1 copies=$2 scene=$3; shift 3
+  for r in $(seq 1 "$reps"); do
+    wait_idle "$name.$r"
+    for k in $(seq 1 "$copies"); do
+      "$cisamr" mesh "$scene" -o "$name.$k.vtu" --report "$name.$r.$k.json" -q "$@" &
+    done
+    wait
+    rm -f "$name".*.vtu
+    sync
+  done
+}
+
 # NAME SCENE PARTS1 PARTS2 [options...]: the sequential run, 1 rank with PARTS1, 2 ranks
-# with PARTS2, then the table.
+# with PARTS2, then the table, and what N ranks would take from each 1-rank run with N > 1
+# partitions (project_ranks.py: NAME-proj-nN.txt).
 study() {
   local tag=$1 scene=$2 parts1=$3 parts2=$4; shift 4
   run "$tag-seq" 0 "$scene" "$@"
   for n in $parts1; do run "$tag-r1-n$n" 1 "$scene" --partitions "$n" "$@"; done
   for n in $parts2; do run "$tag-r2-n$n" 2 "$scene" --partitions "$n" "$@"; done
-  for p in ${RANKS:-}; do run "$tag-r$p-n$p" "$p" "$scene" --partitions "$p" "$@"; done
+  for p in ${RANKS:-}; do
+    run "$tag-r$p-n$p" "$p" "$scene" --partitions "$p" "$@"
+    run_copies "$tag-copies$p" "$p" "$scene" "$@"
+  done
   python3 "$here/bench_table.py" "$tag" "$reps" > "$tag.md"
   cat "$tag.md"
+  for p in ${RANKS:-}; do
+    python3 - "$tag" "$p" <<'PY'
+import glob, json, statistics, sys
+tag, p = sys.argv[1], sys.argv[2]
+alone = statistics.median(json.load(open(f))["total_s"] for f in glob.glob(tag + "-seq.*.json"))
+busy = statistics.median(json.load(open(f))["total_s"] for f in glob.glob("%s-copies%s.*.json" % (tag, p)))
+ranks = statistics.median(json.load(open(f))["total_s"] for f in glob.glob("%s-r%s-n%s.*.json" % (tag, p, p)))
+print("%s ranks: %.2f s, efficiency %.3f; %s sequential runs at once %.2f s each against %.2f s alone "
+      "(the machine keeps %.3f of a core), efficiency against them %.3f"
+      % (p, ranks, alone / (int(p) * ranks), p, busy, alone, alone / busy, busy / (int(p) * ranks)))
+PY
+  done
+  for n in $parts1; do
+    [ "$n" -gt 1 ] || continue
+    python3 "$here/project_ranks.py" --sequential "$tag-seq".*.json --partitions "$tag-r1-n$n".*.json > "$tag-proj-n$n.txt"
+    echo "projected from $tag-r1-n$n: $(head -1 "$tag-proj-n$n.txt")"
+  done
 }
 
 if [ "$which" = 2d ] || [ "$which" = all ]; then

@@ -1,0 +1,52 @@
+#!/usr/bin/env bash
+# validation/bench/project_ranks.py on real reports (issue #15: what N ranks would take, from
+# runs on one process): two sequential runs and two 4-partition runs of a 3D example. The
+# projection reads each partition's kernel parts (`kernel_stages_s`), takes the runs'
+# medians, charges the sum over parts of their maxima (at least the slowest partition's
+# kernel), and refuses runs of different meshes or a run that was not partitioned.
+# Usage: project_ranks.sh CISAMR SOURCE_DIR
+set -u
+cisamr=$1
+source_dir=$2
+. "$(dirname "$0")/common.sh"
+project="python3 $source_dir/validation/bench/project_ranks.py"
+scene=$source_dir/data/examples/spheres3d.json
+
+for i in 1 2; do
+  "$cisamr" mesh "$scene" -o "$dir/s.vtu" -q --report "$dir/seq.$i.json" || fail "sequential run $i"
+  "$cisamr" mesh "$scene" -o "$dir/p.pvtu" --partitions 4 -q --report "$dir/n4.$i.json" || fail "4 partitions, run $i"
+done
+$project --sequential "$dir"/seq.*.json --partitions "$dir"/n4.*.json --json > "$dir/p.json" || fail "projection"
+python3 - "$dir" <<'PY' || fail "projection's figures"
+import json, sys
+d = sys.argv[1]
+p = json.load(open(d + "/p.json"))
+runs = [json.load(open("%s/n4.%d.json" % (d, i))) for i in (1, 2)]
+seqs = [json.load(open("%s/seq.%d.json" % (d, i))) for i in (1, 2)]
+assert p["partitions"] == 4, p
+# Two runs: every median is their mean.
+assert abs(p["sequential_s"] - (seqs[0]["total_s"] + seqs[1]["total_s"]) / 2) < 1e-9, p
+stages = [[(runs[0]["partitions"][i]["kernel_stages_s"][s] + runs[1]["partitions"][i]["kernel_stages_s"][s]) / 2
+           for s in range(4)] for i in range(4)]
+waits = sum(max(stages[i][s] for i in range(4)) for s in range(4))
+assert abs(p["terms"]["kernel"] - waits) < 1e-9, (p["terms"]["kernel"], waits)
+assert p["terms"]["kernel"] >= p["kernel"]["slowest_s"] - 1e-12, p
+assert p["kernel"]["waits_over_slowest"] >= 1 - 1e-12, p
+assert abs(p["projected_s"] - sum(p["terms"].values())) < 1e-9, p
+assert abs(p["efficiency"] - p["sequential_s"] / (4 * p["projected_s"])) < 1e-12, p
+assert p["cells_meshed_over_domain"] > 1, p  # a ghost
+assert not p["unknown_phases"], p["unknown_phases"]
+PY
+
+# Refusals: runs of two meshes, and a sequential report given as the partitions' run.
+other=$source_dir/data/examples/stl3d.json
+"$cisamr" mesh "$other" -o "$dir/o.pvtu" --partitions 4 -q --report "$dir/other.json" || fail "other scene"
+if $project --sequential "$dir"/seq.*.json --partitions "$dir/n4.1.json" "$dir/other.json" > "$dir/out.txt" 2>&1; then
+  fail "runs of two meshes accepted"
+fi
+grep -q "checksum" "$dir/out.txt" || fail "the refusal does not name the checksum: $(cat "$dir/out.txt")"
+if $project --sequential "$dir/seq.1.json" --partitions "$dir/seq.2.json" > "$dir/out.txt" 2>&1; then
+  fail "a sequential run accepted as the partitions' run"
+fi
+grep -q "partitions" "$dir/out.txt" || fail "the refusal does not say why: $(cat "$dir/out.txt")"
+echo "project_ranks: ok"
