@@ -88,14 +88,18 @@ run() {
 # share caches, memory bandwidth or a turbo budget runs each slower than one alone: the
 # median over the copies against the sequential run's is that loss, which no mesher avoids
 # (a lent 16-core machine at 876a47f lost about a quarter from 4 busy cores on; SCALING.md).
+# Needs P times the sequential run's memory.
 run_copies() {
   local name=$1 copies=$2 scene=$3; shift 3
+  local pids pid
   for r in $(seq 1 "$reps"); do
     wait_idle "$name.$r"
+    pids=()
     for k in $(seq 1 "$copies"); do
       "$cisamr" mesh "$scene" -o "$name.$k.vtu" --report "$name.$r.$k.json" -q "$@" &
+      pids+=($!)
     done
-    wait
+    for pid in "${pids[@]}"; do wait "$pid" || { echo "$name.$r: a sequential copy failed" >&2; exit 1; }; done
     rm -f "$name".*.vtu
     sync
   done
@@ -122,6 +126,9 @@ tag, p = sys.argv[1], sys.argv[2]
 alone = statistics.median(json.load(open(f))["total_s"] for f in glob.glob(tag + "-seq.*.json"))
 busy = statistics.median(json.load(open(f))["total_s"] for f in glob.glob("%s-copies%s.*.json" % (tag, p)))
 ranks = statistics.median(json.load(open(f))["total_s"] for f in glob.glob("%s-r%s-n%s.*.json" % (tag, p, p)))
+sums = {json.load(open(f))["checksum"] for f in glob.glob(tag + "-seq.*.json") + glob.glob("%s-copies%s.*.json" % (tag, p))}
+if len(sums) != 1:
+    print("%s sequential runs at once: CHECKSUMS DIFFER %s" % (p, sorted(sums)))
 print("%s ranks: %.2f s, efficiency %.3f; %s sequential runs at once %.2f s each against %.2f s alone "
       "(the machine keeps %.3f of a core), efficiency against them %.3f"
       % (p, ranks, alone / (int(p) * ranks), p, busy, alone, alone / busy, busy / (int(p) * ranks)))
