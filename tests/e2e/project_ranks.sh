@@ -3,7 +3,8 @@
 # runs on one process): two sequential runs and two 4-partition runs of a 3D example. The
 # projection reads each partition's kernel parts (`kernel_stages_s`), takes the runs'
 # medians, charges the sum over parts of their maxima (at least the slowest partition's
-# kernel), and refuses runs of different meshes or a run that was not partitioned.
+# kernel; in 2D, which exchanges nothing, the slowest partition's), and refuses runs of
+# different meshes or a run that was not partitioned.
 # Usage: project_ranks.sh CISAMR SOURCE_DIR
 set -u
 cisamr=$1
@@ -36,6 +37,21 @@ assert abs(p["projected_s"] - sum(p["terms"].values())) < 1e-9, p
 assert abs(p["efficiency"] - p["sequential_s"] / (4 * p["projected_s"])) < 1e-12, p
 assert p["cells_meshed_over_domain"] > 1, p  # a ghost
 assert not p["unknown_phases"], p["unknown_phases"]
+PY
+
+# 2D (composite.json) exchanges nothing: no parts, the kernel is the slowest partition's.
+scene2=$source_dir/data/examples/composite.json
+"$cisamr" mesh "$scene2" -o "$dir/s2.vtu" -q --report "$dir/seq2.json" || fail "2D sequential run"
+"$cisamr" mesh "$scene2" -o "$dir/p2.pvtu" --partitions 3 -q --report "$dir/n3.json" || fail "2D, 3 partitions"
+$project --sequential "$dir/seq2.json" --partitions "$dir/n3.json" --json > "$dir/p2.json" || fail "2D projection"
+python3 - "$dir" <<'PY' || fail "2D projection's figures"
+import json, sys
+d = sys.argv[1]
+p, run = json.load(open(d + "/p2.json")), json.load(open(d + "/n3.json"))
+assert all("kernel_stages_s" not in q for q in run["partitions"]), run["partitions"]
+slowest = max(q["kernel_s"] for q in run["partitions"])
+assert p["terms"]["kernel"] == slowest and p["kernel"]["waits_over_slowest"] == 1, p
+assert p["partitions"] == 3 and not p["unknown_phases"], p
 PY
 
 # Refusals: runs of two meshes, and a sequential report given as the partitions' run.
