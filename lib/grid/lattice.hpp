@@ -35,6 +35,12 @@ struct CellRange {
       if (c[d] < lo[d] || c[d] >= hi[d]) return false;
     return true;
   }
+  // Whether the two ranges share a cell.
+  bool meets(const CellRange& o) const {
+    for (int d = 0; d < Dim; ++d)
+      if (o.hi[d] <= lo[d] || hi[d] <= o.lo[d]) return false;
+    return true;
+  }
 };
 
 template <int Dim>

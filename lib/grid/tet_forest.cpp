@@ -241,13 +241,11 @@ std::vector<std::int32_t> TetForest::prune(std::span<const std::int32_t> roots) 
   std::vector<std::int32_t> index(tets_.size(), 0);  // first 1 for the dropped tets
   std::vector<std::int32_t> stack;
   for (const std::int32_t r : roots) {
-    const Tet& x = tets_[static_cast<std::size_t>(r)];
-    if (x.first_child >= 0)
-      for (int c = 0; c < tet::child_count(kind_of_local(x.local)); ++c) stack.push_back(x.first_child + c);
+    stack.push_back(r);
     while (!stack.empty()) {
       const std::int32_t u = stack.back();
       stack.pop_back();
-      index[static_cast<std::size_t>(u)] = 1;
+      if (u != r) index[static_cast<std::size_t>(u)] = 1;
       const Tet& y = tets_[static_cast<std::size_t>(u)];
       if (y.first_child >= 0)
         for (int c = 0; c < tet::child_count(kind_of_local(y.local)); ++c) stack.push_back(y.first_child + c);

@@ -32,8 +32,8 @@ struct ClosedBox {
 // The round trip of one exchange: ask[r] holds the questions for rank r, each led by the id
 // of the partition asked; each rank answers what it received, one question at a time, after
 // checking that the partition asked is its own (`answer(j, u, out)`: j its position in
-// `mine`, the question's remaining fields read from u, the answer written to out). Returns, per rank, the answers to this rank's questions in
-// their order. Each local step agrees on its errors (a check failing on one rank must not
+// `mine`, the question's remaining fields read from u, the answer written to out). Returns,
+// per rank, the answers to this rank's questions in their order. Each local step agrees on its errors (a check failing on one rank must not
 // leave the others waiting in the next alltoallv).
 template <class AnswerOne>
 std::vector<Bytes> ask_and_answer(const Comm& comm, std::vector<Packer>& ask, std::span<SnappedPartition> mine,
@@ -143,16 +143,6 @@ std::vector<std::vector<samr::CubeRefinement>> exchange_forests(const Comm& comm
                                                                 std::span<SnappedPartition> mine, std::int64_t& cubes) {
   const int ranks = comm.size();
   const int partitions = static_cast<int>(boxes.size());
-  const auto holds = [](const grid::CellRange<3>& b, const std::array<std::int64_t, 3>& c) {
-    for (int d = 0; d < 3; ++d)
-      if (c[static_cast<std::size_t>(d)] < b.lo[d] || c[static_cast<std::size_t>(d)] >= b.hi[d]) return false;
-    return true;
-  };
-  const auto meets = [](const grid::CellRange<3>& a, const grid::CellRange<3>& b) {
-    for (int d = 0; d < 3; ++d)
-      if (a.hi[d] <= b.lo[d] || b.hi[d] <= a.lo[d]) return false;
-    return true;
-  };
   // Questions per owner's rank: (owner partition, cube); what each asked for: (position in
   // `mine`, cube), in the same order.
   std::vector<Packer> ask(static_cast<std::size_t>(ranks));
@@ -165,14 +155,14 @@ std::vector<std::vector<samr::CubeRefinement>> exchange_forests(const Comm& comm
       const grid::CellRange<3>& range = mine[i].snapped->grid->forest.range();
       neighbours.clear();
       for (int q = 0; q < partitions; ++q)
-        if (q != mine[i].id && meets(boxes[static_cast<std::size_t>(q)], range)) neighbours.push_back(q);
+        if (q != mine[i].id && boxes[static_cast<std::size_t>(q)].meets(range)) neighbours.push_back(q);
       for (std::int64_t ck = range.lo[2]; ck < range.hi[2]; ++ck)
         for (std::int64_t cj = range.lo[1]; cj < range.hi[1]; ++cj)
           for (std::int64_t ci = range.lo[0]; ci < range.hi[0]; ++ci) {
             const std::array<std::int64_t, 3> cube{ci, cj, ck};
-            if (holds(own, cube)) continue;
+            if (own.contains(cube)) continue;
             const auto owner = std::find_if(neighbours.begin(), neighbours.end(),
-                                            [&](int q) { return holds(boxes[static_cast<std::size_t>(q)], cube); });
+                                            [&](int q) { return boxes[static_cast<std::size_t>(q)].contains(cube); });
             CISAMR_CHECK(owner != neighbours.end(), "exchange near faces: a cube in no partition's box");
             const auto r = static_cast<std::size_t>(rank_of_partition(*owner, partitions, ranks));
             ask[r].put<std::int32_t>(*owner);
@@ -186,7 +176,7 @@ std::vector<std::vector<samr::CubeRefinement>> exchange_forests(const Comm& comm
     const auto cube = u.get<std::array<std::int64_t, 3>>();
     const samr::RefinedGrid3& grid = *mine[j].snapped->grid;
     const std::int64_t at = grid.cube_index(cube[0], cube[1], cube[2]);
-    CISAMR_CHECK(at >= 0 && holds(boxes[static_cast<std::size_t>(mine[j].id)], cube),
+    CISAMR_CHECK(at >= 0 && boxes[static_cast<std::size_t>(mine[j].id)].contains(cube),
                  "exchange near faces: a cube outside its owner's box");
     bits.clear();
     for (int local = 0; local < 5; ++local) grid.forest.append_refinement(static_cast<std::int32_t>(5 * at + local), bits);

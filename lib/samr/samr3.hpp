@@ -91,10 +91,11 @@ struct CubeRefinement {
 
 // Gives the cubes of `taken` (in g's range) the refinement listed there: the parallel
 // mesher's partitions take the forest near their boxes from the partitions that own it
-// (lib/parallel/README.md, "Decisions exchanged near faces"). Where any differs from g's
-// own, g is rebuilt with every other tree as it was and the cut lists the new trees give
-// (a new tet's list is its parent's filtered as the sweeps filter it), so g must still
-// hold its lists (before release_lists). Returns the cubes that differed.
+// (lib/parallel/README.md, "Decisions exchanged near faces"). The cubes whose trees differ
+// from g's own are pruned to their roots in place (every other tet keeps its order and cut
+// list) and grown again from the bits, a new tet's list its parent's filtered as the sweeps
+// filter it, so g must still hold its lists (before release_lists). Returns the cubes that
+// differed.
 std::int64_t take_cube_refinements(const geometry::Oracle3& oracle, RefinedGrid3& g,
                                    std::span<const CubeRefinement> taken);
 
