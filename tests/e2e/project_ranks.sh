@@ -54,15 +54,29 @@ assert p["terms"]["kernel"] == slowest and p["kernel"]["waits_over_slowest"] == 
 assert p["partitions"] == 3 and not p["unknown_phases"], p
 PY
 
-# Refusals: runs of two meshes, and a sequential report given as the partitions' run.
+# Bad input: one line on stderr naming the report and the field, exit code 2, nothing on
+# stdout. Runs of two meshes (among the partitions' runs, and against the sequential runs),
+# a sequential report as the partitions' run and the reverse, a missing file, not a report.
 other=$source_dir/data/examples/stl3d.json
 "$cisamr" mesh "$other" -o "$dir/o.pvtu" --partitions 4 -q --report "$dir/other.json" || fail "other scene"
-if $project --sequential "$dir"/seq.*.json --partitions "$dir/n4.1.json" "$dir/other.json" > "$dir/out.txt" 2>&1; then
-  fail "runs of two meshes accepted"
-fi
-grep -q "checksum" "$dir/out.txt" || fail "the refusal does not name the checksum: $(cat "$dir/out.txt")"
-if $project --sequential "$dir/seq.1.json" --partitions "$dir/seq.2.json" > "$dir/out.txt" 2>&1; then
-  fail "a sequential run accepted as the partitions' run"
-fi
-grep -q "partitions" "$dir/out.txt" || fail "the refusal does not say why: $(cat "$dir/out.txt")"
+echo '{"format": "something-else"}' > "$dir/alien.json"
+refused() {  # WHAT FILE FIELD ARGS...: the projection must refuse ARGS naming FILE and FIELD
+  local what=$1 file=$2 field=$3; shift 3
+  $project "$@" > "$dir/out.txt" 2> "$dir/err.txt"
+  local code=$?
+  [ "$code" = 2 ] || fail "$what: exit code $code, not 2"
+  [ ! -s "$dir/out.txt" ] || fail "$what: printed a projection: $(cat "$dir/out.txt")"
+  [ "$(wc -l < "$dir/err.txt")" = 1 ] || fail "$what: not one line: $(cat "$dir/err.txt")"
+  grep -qF "$file: $field:" "$dir/err.txt" || fail "$what: does not name $file and $field: $(cat "$dir/err.txt")"
+}
+refused "runs of two meshes" "$dir/other.json" checksum \
+  --sequential "$dir"/seq.*.json --partitions "$dir/n4.1.json" "$dir/other.json"
+refused "another mesh than the sequential runs'" "$dir/other.json" checksum \
+  --sequential "$dir"/seq.*.json --partitions "$dir/other.json"
+refused "a sequential run as the partitions' run" "$dir/seq.2.json" partitions \
+  --sequential "$dir/seq.1.json" --partitions "$dir/seq.2.json"
+refused "a partitioned run as the sequential one" "$dir/n4.1.json" partitions \
+  --sequential "$dir/n4.1.json" --partitions "$dir/n4.2.json"
+refused "a missing file" "$dir/none.json" - --sequential "$dir/none.json" --partitions "$dir/n4.1.json"
+refused "not a report" "$dir/alien.json" format --sequential "$dir/seq.1.json" --partitions "$dir/alien.json"
 echo "project_ranks: ok"

@@ -41,14 +41,41 @@ def median(values):
     return v[len(v) // 2] if len(v) % 2 else (v[len(v) // 2 - 1] + v[len(v) // 2]) / 2
 
 
-def median_report(runs, what):
+def refuse(path, field, what):
+    """Bad input: one line naming the file, the field and what is wrong; exit code 2."""
+    print("project_ranks.py: %s: %s: %s" % (path, field, what), file=sys.stderr)
+    sys.exit(2)
+
+
+def read_report(path, partitioned):
+    """A cisamr-report/1 file with what the projection reads; `partitioned`: of a run with
+    --partitions on one rank (each partition's kernel time), else of the sequential mesher."""
+    try:
+        with open(path) as f:
+            r = json.load(f)
+    except (OSError, ValueError) as e:
+        refuse(path, "-", "not a readable JSON report (%s)" % e)
+    if not isinstance(r, dict) or r.get("format") != "cisamr-report/1":
+        refuse(path, "format", "not a cisamr-report/1 (cisamr mesh --report)")
+    for field in ("checksum", "total_s", "timings_s", "partitions"):
+        if field not in r:
+            refuse(path, field, "missing (a report of cisamr mesh with its checksum)")
+    if partitioned:
+        if r.get("ranks") != 1 or not r["partitions"] or "kernel_s" not in r["partitions"][0]:
+            refuse(path, "partitions", "the partitions' run must be cisamr mesh --partitions N on one rank")
+    elif r["partitions"] and "kernel_s" in r["partitions"][0]:
+        refuse(path, "partitions", "a partitioned run given as the sequential one")
+    return r
+
+
+def median_report(paths, runs, what):
     """One report whose times are the runs' medians (phases, total, each partition's kernel
     and its parts); the runs must be of one mesh."""
     first = runs[0]
-    for r in runs:
-        if r.get("checksum") != first.get("checksum") or len(r["partitions"]) != len(first["partitions"]):
-            sys.exit("project_ranks.py: %s: checksum: the %s runs are not of one mesh (%s, %s)"
-                     % (r.get("output"), what, r.get("checksum"), first.get("checksum")))
+    for path, r in zip(paths, runs):
+        if r["checksum"] != first["checksum"] or len(r["partitions"]) != len(first["partitions"]):
+            refuse(path, "checksum", "the %s runs are not of one mesh (%s against %s's %s)"
+                   % (what, r["checksum"], paths[0], first["checksum"]))
     out = json.loads(json.dumps(first))
     out["total_s"] = median([r["total_s"] for r in runs])
     names = set().union(*(r["timings_s"] for r in runs))
@@ -67,12 +94,6 @@ def phase_seconds(report):
 
 
 def project(sequential, parts):
-    if parts.get("ranks", 1) != 1 or "kernel_s" not in parts["partitions"][0]:
-        sys.exit("project_ranks.py: %s: ranks: the partitions' run must be on one rank, with --partitions"
-                 % parts.get("output"))
-    if sequential.get("checksum") != parts.get("checksum"):
-        print("warning: the two runs' checksums differ (%s, %s): not the same mesh"
-              % (sequential.get("checksum"), parts.get("checksum")), file=sys.stderr)
     partitions = parts["partitions"]
     n = len(partitions)
     phases = phase_seconds(parts)
@@ -142,14 +163,11 @@ def main():
     args = parser.parse_args()
     reports = []
     for paths, what in ((args.sequential, "sequential"), (args.partitions, "partitions'")):
-        runs = []
-        for path in paths:
-            try:
-                with open(path) as f:
-                    runs.append(json.load(f))
-            except (OSError, ValueError) as e:
-                sys.exit("project_ranks.py: %s: %s" % (path, e))
-        reports.append(median_report(runs, what))
+        runs = [read_report(path, what != "sequential") for path in paths]
+        reports.append(median_report(paths, runs, what))
+    if reports[0]["checksum"] != reports[1]["checksum"]:
+        refuse(args.partitions[0], "checksum", "not the sequential runs' mesh (%s against %s)"
+               % (reports[1]["checksum"], reports[0]["checksum"]))
     p = project(*reports)
     if args.json:
         print(json.dumps(p, indent=1))
