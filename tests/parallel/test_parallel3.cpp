@@ -448,9 +448,7 @@ TEST(SamrReach3, BeyondTheFirstLayerTheForestIsTheWholeRunsForest) {
           for (std::int64_t ck = range.lo[2]; ck < range.hi[2]; ++ck)
             for (std::int64_t cj = range.lo[1]; cj < range.hi[1]; ++cj)
               for (std::int64_t ci = range.lo[0]; ci < range.hi[0]; ++ci) {
-                if (ci >= inner.lo[0] && ci < inner.hi[0] && cj >= inner.lo[1] && cj < inner.hi[1] && ck >= inner.lo[2] &&
-                    ck < inner.hi[2])
-                  continue;
+                if (inner.contains({ci, cj, ck})) continue;
                 samr::CubeRefinement c{{ci, cj, ck}, {}};
                 for (int local = 0; local < 5; ++local) whole.forest.append_refinement(whole.forest.root(ci, cj, ck, local), c.bits);
                 owners.push_back(std::move(c));
